@@ -1,0 +1,20 @@
+//! A verified classic ray tracer.
+//!
+//! See ARCHITECTURE.md at the repository root for the bird's-eye view and invariants.
+
+pub mod aabb;
+pub mod aggregate;
+pub mod bvh;
+pub mod camera;
+pub mod ray;
+pub mod real;
+pub mod scene;
+pub mod shapes;
+pub mod transform;
+
+pub use aggregate::{Aggregate, Hit, Instance};
+pub use camera::{Camera, ViewingModel, Window};
+pub use ray::Ray;
+pub use real::{Real, Vec3};
+pub use shapes::Shape;
+pub use transform::{Affine64, Transform};

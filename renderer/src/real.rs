@@ -1,0 +1,55 @@
+//! The precision switch. The renderer computes in `Real`, which is `f32` by default and
+//! `f64` with the `f64` cargo feature. Scene files are always parsed in `f64` and converted
+//! once, when the scene is built.
+
+#[cfg(not(feature = "f64"))]
+mod imp {
+    /// The floating-point type of every geometric computation.
+    pub type Real = f32;
+    /// A 3-vector of `Real`.
+    pub type Vec3 = glam::Vec3;
+    /// A 3×3 matrix of `Real` (glam, column-major, column-vector convention).
+    pub type Mat3 = glam::Mat3;
+    /// A 2-vector of `Real`.
+    pub type Vec2 = glam::Vec2;
+    /// Name of the precision, for reports.
+    pub const PRECISION: &str = "f32";
+}
+
+#[cfg(feature = "f64")]
+mod imp {
+    /// The floating-point type of every geometric computation.
+    pub type Real = f64;
+    /// A 3-vector of `Real`.
+    pub type Vec3 = glam::DVec3;
+    /// A 3×3 matrix of `Real` (glam, column-major, column-vector convention).
+    pub type Mat3 = glam::DMat3;
+    /// A 2-vector of `Real`.
+    pub type Vec2 = glam::DVec2;
+    /// Name of the precision, for reports.
+    pub const PRECISION: &str = "f64";
+}
+
+pub use imp::*;
+
+/// Converts an `f64` vector from the scene file into the renderer's precision.
+#[inline]
+pub fn vec3(v: glam::DVec3) -> Vec3 {
+    Vec3::new(v.x as Real, v.y as Real, v.z as Real)
+}
+
+/// Converts a renderer vector to `f64` (for reports and AOVs).
+#[inline]
+pub fn dvec3(v: Vec3) -> glam::DVec3 {
+    glam::DVec3::new(v.x as f64, v.y as f64, v.z as f64)
+}
+
+/// Machine epsilon of `Real` halved (the unit roundoff), as in pbrt's `gamma(n)`.
+pub const UNIT_ROUNDOFF: Real = Real::EPSILON * 0.5;
+
+/// pbrt's γ(n) = nε/(1 − nε): a bound on the relative error of n chained roundings.
+#[inline]
+pub const fn gamma(n: i32) -> Real {
+    let ne = n as Real * UNIT_ROUNDOFF;
+    ne / (1.0 - ne)
+}

@@ -1,0 +1,538 @@
+//! From the parsed file to a render-ready [`Scene`]: validation, transform composition,
+//! material and definition resolution, mesh loading, and the acceleration structure.
+//!
+//! Groups in the object tree are flattened: their transforms compose into each leaf.
+//! Named definitions are built once into a shared [`Aggregate`] and placed by reference,
+//! so a definition instanced many times is stored once. Meshes are loaded once per file.
+
+use super::error::{SceneError, Source};
+use super::format::{self, CameraDesc, NodeDesc, NodeKind, ScaleArg, TransformOp, V3};
+use super::{Color, Light, Material, Scene, Settings};
+use crate::aggregate::{Aggregate, Instance, INHERIT};
+use crate::camera::{Camera, CameraError, ViewingModel, Window};
+use crate::real::{vec3, Real, Vec2};
+use crate::shapes::{Mesh, Shape, Triangle};
+use crate::transform::{Affine64, Transform};
+use glam::{DMat3, DVec3};
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use toml::Spanned;
+
+fn dv(v: V3) -> DVec3 {
+    DVec3::from_array(v)
+}
+
+fn color(v: V3) -> Color {
+    Color::new(v[0] as f32, v[1] as f32, v[2] as f32)
+}
+
+/// Parses and builds.
+pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> {
+    let src = Source::new(file, text);
+    let desc = format::parse(text).map_err(|(span, path, msg)| {
+        let field = if path.is_empty() || path == "." {
+            "(syntax)".to_string()
+        } else {
+            path
+        };
+        src.error(span.map_or(0, |s| s.start), field, msg)
+    })?;
+    let r = desc.render.get_ref();
+    let at_render = |field: &str, msg: &str| {
+        src.error(desc.render.span().start, format!("render.{field}"), msg)
+    };
+    if r.width == 0 || r.height == 0 {
+        return Err(at_render("width", "width and height must be at least 1"));
+    }
+    if r.samples == 0 {
+        return Err(at_render("samples", "samples must be at least 1"));
+    }
+    for (name, v) in [
+        ("background", r.background),
+        ("ambient_light", r.ambient_light),
+    ] {
+        if v.iter().any(|x| !x.is_finite() || *x < 0.0) {
+            return Err(at_render(name, "colour components must be finite and ≥ 0"));
+        }
+    }
+    if !(r.adc_bailout.is_finite() && r.adc_bailout >= 0.0) {
+        return Err(at_render("adc_bailout", "must be finite and ≥ 0"));
+    }
+    let settings = Settings {
+        width: r.width,
+        height: r.height,
+        samples: r.samples,
+        max_depth: r.max_depth,
+        adc_bailout: r.adc_bailout as f32,
+        background: color(r.background),
+        ambient_light: color(r.ambient_light),
+    };
+    let camera = build_camera(&desc.camera, r.width, r.height, &src)?;
+
+    let mut lights = Vec::new();
+    for (k, l) in desc.lights.iter().enumerate() {
+        let d = l.get_ref();
+        let field = format!("lights[{k}]");
+        let err = |f: &str, m: &str| src.error(l.span().start, format!("{field}.{f}"), m);
+        if d.position.iter().any(|x| !x.is_finite()) {
+            return Err(err("position", "must be finite"));
+        }
+        if d.color.iter().any(|x| !x.is_finite() || *x < 0.0) {
+            return Err(err("color", "components must be finite and ≥ 0"));
+        }
+        let fade = match (d.fade_distance, d.fade_power) {
+            (Some(dist), Some(pow)) if pow > 0.0 => {
+                if !(dist > 0.0 && dist.is_finite() && pow.is_finite()) {
+                    return Err(err(
+                        "fade_distance",
+                        "fade_distance must be > 0 and both finite",
+                    ));
+                }
+                Some((dist as Real, pow as Real))
+            }
+            _ => None,
+        };
+        lights.push(Light {
+            position: vec3(dv(d.position)),
+            color: color(d.color),
+            fade,
+        });
+    }
+
+    let mut materials = vec![Material::default()];
+    let mut material_index = HashMap::new();
+    for (name, m) in &desc.materials {
+        let d = m.get_ref();
+        let field = format!("materials.{name}");
+        let scalars = [
+            ("filter", d.filter),
+            ("transmit", d.transmit),
+            ("ambient", d.ambient),
+            ("emission", d.emission),
+            ("diffuse", d.diffuse),
+            ("brilliance", d.brilliance),
+            ("phong", d.phong),
+            ("phong_size", d.phong_size),
+            ("specular", d.specular),
+            ("roughness", d.roughness),
+            ("reflection", d.reflection),
+            ("ior", d.ior),
+        ];
+        for (f, x) in scalars {
+            if !x.is_finite() || x < 0.0 {
+                return Err(src.error(
+                    m.span().start,
+                    format!("{field}.{f}"),
+                    "must be finite and ≥ 0",
+                ));
+            }
+        }
+        if d.color.iter().any(|x| !x.is_finite() || *x < 0.0) {
+            return Err(src.error(
+                m.span().start,
+                format!("{field}.color"),
+                "components must be finite and ≥ 0",
+            ));
+        }
+        if d.roughness == 0.0 && d.specular > 0.0 {
+            return Err(src.error(
+                m.span().start,
+                format!("{field}.roughness"),
+                "must be > 0 when specular is used",
+            ));
+        }
+        if d.ior == 0.0 {
+            return Err(src.error(m.span().start, format!("{field}.ior"), "must be > 0"));
+        }
+        material_index.insert(name.clone(), materials.len() as u32);
+        materials.push(Material {
+            name: name.clone(),
+            color: color(d.color),
+            filter: d.filter as f32,
+            transmit: d.transmit as f32,
+            ambient: d.ambient as f32,
+            emission: d.emission as f32,
+            diffuse: d.diffuse as f32,
+            brilliance: d.brilliance as f32,
+            phong: d.phong as f32,
+            phong_size: d.phong_size as f32,
+            specular: d.specular as f32,
+            roughness: d.roughness as f32,
+            reflection: d.reflection as f32,
+            ior: d.ior as f32,
+        });
+    }
+
+    let mut b = Builder {
+        src: &src,
+        base: base.to_path_buf(),
+        materials: material_index,
+        defs: &desc.defs,
+        built_defs: HashMap::new(),
+        in_progress: HashSet::new(),
+        meshes: HashMap::new(),
+        objects: Vec::new(),
+    };
+    let mut instances = Vec::new();
+    for (k, node) in desc.objects.iter().enumerate() {
+        b.node(
+            node,
+            &format!("objects[{k}]"),
+            &Affine64::IDENTITY,
+            0,
+            true,
+            &mut instances,
+        )?;
+    }
+    let objects = std::mem::take(&mut b.objects);
+    Ok(Scene {
+        camera,
+        settings,
+        lights,
+        materials,
+        root: Aggregate::new(instances),
+        objects,
+    })
+}
+
+fn build_camera(
+    c: &Spanned<CameraDesc>,
+    cols: u32,
+    rows: u32,
+    src: &Source,
+) -> Result<Camera, SceneError> {
+    let (form, model) = match c.get_ref() {
+        CameraDesc::View {
+            vrp,
+            vpn,
+            vup,
+            e,
+            window,
+        } => (
+            "view",
+            Ok(ViewingModel {
+                vrp: dv(*vrp),
+                vpn: dv(*vpn),
+                vup: dv(*vup),
+                e: *e,
+                window: Window {
+                    left: window.left,
+                    right: window.right,
+                    bottom: window.bottom,
+                    top: window.top,
+                },
+                cols,
+                rows,
+            }),
+        ),
+        CameraDesc::LookAt {
+            from,
+            at,
+            up,
+            fov,
+            fov_axis,
+        } => (
+            "look_at",
+            ViewingModel::look_at(dv(*from), dv(*at), dv(*up), *fov, *fov_axis, cols, rows),
+        ),
+        CameraDesc::Povray {
+            location,
+            direction,
+            right,
+            up,
+        } => (
+            "povray",
+            ViewingModel::povray(
+                dv(*location),
+                dv(*direction),
+                dv(*right),
+                dv(*up),
+                cols,
+                rows,
+            ),
+        ),
+    };
+    model.and_then(Camera::new).map_err(|e| {
+        let field = camera_field(form, &e);
+        src.error(c.span().start, format!("camera.{form}.{field}"), e)
+    })
+}
+
+/// The field of a camera form that a camera error is about.
+fn camera_field(form: &str, e: &CameraError) -> &'static str {
+    use CameraError::*;
+    match (form, e) {
+        ("view", ZeroVector(s)) if s.contains("vpn") => "vpn",
+        ("view", ZeroVector(_)) => "vup",
+        ("view", UpParallel) => "vup",
+        ("view", EyeDistance(_)) => "e",
+        ("view", EmptyWindow) => "window",
+        ("view", NonFinite(s)) if s.contains("window") => "window",
+        ("view", NonFinite(_)) => "vrp",
+        ("look_at", ZeroVector(s)) if s.contains("at") => "at",
+        ("look_at", ZeroVector(_) | UpParallel) => "up",
+        ("look_at", FieldOfView(_)) => "fov",
+        ("look_at", NonFinite(_)) => "from",
+        ("povray", ZeroVector("right")) => "right",
+        ("povray", ZeroVector("up") | NotOrthogonal(_)) => "up",
+        ("povray", ZeroVector(_) | EyeDistance(_)) => "direction",
+        ("povray", NonFinite(_)) => "location",
+        (_, EmptyPixelArray) => "width",
+        _ => "(camera)",
+    }
+}
+
+/// The affine map of one transform operation.
+pub fn op_affine(op: &TransformOp) -> Result<Affine64, String> {
+    Ok(match op {
+        TransformOp::Translate(v) => Affine64::translate(dv(*v)),
+        TransformOp::Rotate { axis, degrees } => {
+            let a = dv(*axis);
+            if !(a.length() > 0.0 && a.is_finite()) {
+                return Err("the rotation axis is a zero-length or non-finite vector".into());
+            }
+            if !degrees.is_finite() {
+                return Err("the rotation angle is not finite".into());
+            }
+            Affine64::linear(DMat3::from_axis_angle(a.normalize(), degrees.to_radians()))
+        }
+        TransformOp::Scale(ScaleArg::Uniform(s)) => {
+            Affine64::linear(DMat3::from_diagonal(DVec3::splat(*s)))
+        }
+        TransformOp::Scale(ScaleArg::PerAxis(s)) => Affine64::linear(DMat3::from_diagonal(dv(*s))),
+        TransformOp::Shear(s) => Affine64::linear(DMat3::from_cols(
+            DVec3::new(1.0, s.yx, s.zx),
+            DVec3::new(s.xy, 1.0, s.zy),
+            DVec3::new(s.xz, s.yz, 1.0),
+        )),
+        TransformOp::Matrix(rows) => Affine64 {
+            m: DMat3::from_cols(dv(rows[0]), dv(rows[1]), dv(rows[2])),
+            d: dv(rows[3]),
+        },
+    })
+}
+
+struct Builder<'a> {
+    src: &'a Source<'a>,
+    base: PathBuf,
+    materials: HashMap<String, u32>,
+    defs: &'a BTreeMap<String, Spanned<NodeDesc>>,
+    built_defs: HashMap<String, Arc<Aggregate>>,
+    in_progress: HashSet<String>,
+    meshes: HashMap<PathBuf, Arc<Mesh>>,
+    objects: Vec<String>,
+}
+
+impl Builder<'_> {
+    /// Flattens `node` into `out`. `numbered`: nodes of the scene's own tree get object ids;
+    /// nodes inside definitions inherit the id of the instance that places them.
+    fn node(
+        &mut self,
+        node: &Spanned<NodeDesc>,
+        path: &str,
+        parent: &Affine64,
+        parent_material: u32,
+        numbered: bool,
+        out: &mut Vec<Instance>,
+    ) -> Result<(), SceneError> {
+        let d = node.get_ref();
+        let at = node.span().start;
+        let err = |field: &str, msg: &dyn std::fmt::Display| {
+            self.src.error(at, format!("{path}.{field}"), msg)
+        };
+        self.check_fields(d, path, at)?;
+
+        // Compose the local transform, validating each operation on its own line.
+        let mut local = Affine64::IDENTITY;
+        for (k, op) in d.transform.iter().enumerate() {
+            let field = format!("{path}.transform[{k}]");
+            let a =
+                op_affine(op.get_ref()).map_err(|m| self.src.error(op.span().start, &field, m))?;
+            a.inverse()
+                .map_err(|e| self.src.error(op.span().start, &field, e))?;
+            local = a.compose(&local);
+        }
+        let xf = parent.compose(&local);
+
+        let material = match &d.material {
+            Some(m) => *self.materials.get(m.get_ref()).ok_or_else(|| {
+                self.src.error(
+                    m.span().start,
+                    format!("{path}.material"),
+                    format!("no material named '{}'", m.get_ref()),
+                )
+            })?,
+            None => parent_material,
+        };
+
+        let shape = match d.kind {
+            NodeKind::Group => {
+                for (k, child) in d.children.iter().flatten().enumerate() {
+                    self.node(
+                        child,
+                        &format!("{path}.children[{k}]"),
+                        &xf,
+                        material,
+                        numbered,
+                        out,
+                    )?;
+                }
+                return Ok(());
+            }
+            NodeKind::Sphere => Shape::Sphere,
+            NodeKind::Plane => Shape::Plane,
+            NodeKind::Box => Shape::Cube,
+            NodeKind::Cylinder => Shape::Cylinder {
+                capped: d.capped.unwrap_or(true),
+            },
+            NodeKind::Cone => Shape::Cone {
+                capped: d.capped.unwrap_or(true),
+            },
+            NodeKind::Disk => Shape::Disk,
+            NodeKind::Rectangle => Shape::Rectangle,
+            NodeKind::Triangle => {
+                let v = d
+                    .vertices
+                    .as_ref()
+                    .ok_or_else(|| err("vertices", &"a triangle needs three vertices"))?;
+                let p = v.get_ref().map(|q| vec3(dv(q)));
+                if p.iter().any(|q| !q.is_finite()) {
+                    return Err(self.src.error(
+                        v.span().start,
+                        format!("{path}.vertices"),
+                        "must be finite",
+                    ));
+                }
+                let tri = Triangle {
+                    p,
+                    n: d.normals.as_ref().map(|n| n.get_ref().map(|q| vec3(dv(q)))),
+                    uv: d
+                        .uvs
+                        .map(|u| u.map(|q| Vec2::new(q[0] as Real, q[1] as Real))),
+                };
+                if !(tri.normal().length_squared() > 0.0) {
+                    return Err(self.src.error(
+                        v.span().start,
+                        format!("{path}.vertices"),
+                        "the triangle is degenerate (zero area)",
+                    ));
+                }
+                Shape::Triangle(Box::new(tri))
+            }
+            NodeKind::Mesh => {
+                let f = d
+                    .file
+                    .as_ref()
+                    .ok_or_else(|| err("file", &"a mesh needs a file"))?;
+                let full = self.base.join(f.get_ref());
+                let mesh = match self.meshes.get(&full) {
+                    Some(m) => m.clone(),
+                    None => {
+                        let m = Arc::new(Mesh::load_obj(&full).map_err(|e| {
+                            self.src.error(
+                                f.span().start,
+                                format!("{path}.file"),
+                                format!("{}: {e}", full.display()),
+                            )
+                        })?);
+                        self.meshes.insert(full, m.clone());
+                        m
+                    }
+                };
+                Shape::Mesh(mesh)
+            }
+            NodeKind::Instance => {
+                let of =
+                    d.of.as_ref()
+                        .ok_or_else(|| err("of", &"an instance needs `of`, a definition's name"))?;
+                Shape::Group(self.def(of)?)
+            }
+        };
+        let transform = if xf.is_identity() {
+            None
+        } else {
+            Some(
+                Transform::new(&xf)
+                    .map_err(|e| err("transform", &format!("composed with its parents: {e}")))?,
+            )
+        };
+        let object_id = if numbered {
+            self.objects.push(path.to_string());
+            self.objects.len() as u32
+        } else {
+            0
+        };
+        out.push(Instance {
+            shape,
+            xf: transform,
+            material,
+            object_id,
+        });
+        Ok(())
+    }
+
+    /// Builds (once) the aggregate of a named definition.
+    fn def(&mut self, of: &Spanned<String>) -> Result<Arc<Aggregate>, SceneError> {
+        let name = of.get_ref();
+        if let Some(a) = self.built_defs.get(name) {
+            return Ok(a.clone());
+        }
+        let defs = self.defs;
+        let Some(node) = defs.get(name) else {
+            return Err(self.src.error(
+                of.span().start,
+                "of",
+                format!("no definition named '{name}'"),
+            ));
+        };
+        if !self.in_progress.insert(name.clone()) {
+            return Err(self.src.error(
+                of.span().start,
+                "of",
+                format!("definition '{name}' contains itself"),
+            ));
+        }
+        let mut inner = Vec::new();
+        self.node(
+            node,
+            &format!("defs.{name}"),
+            &Affine64::IDENTITY,
+            INHERIT,
+            false,
+            &mut inner,
+        )?;
+        self.in_progress.remove(name);
+        let agg = Arc::new(Aggregate::new(inner));
+        self.built_defs.insert(name.clone(), agg.clone());
+        Ok(agg)
+    }
+
+    /// Rejects fields that do not belong to the node's kind.
+    fn check_fields(&self, d: &NodeDesc, path: &str, at: usize) -> Result<(), SceneError> {
+        let k = d.kind;
+        let wrong = [
+            (
+                "capped",
+                d.capped.is_some() && !matches!(k, NodeKind::Cylinder | NodeKind::Cone),
+            ),
+            ("vertices", d.vertices.is_some() && k != NodeKind::Triangle),
+            ("normals", d.normals.is_some() && k != NodeKind::Triangle),
+            ("uvs", d.uvs.is_some() && k != NodeKind::Triangle),
+            ("file", d.file.is_some() && k != NodeKind::Mesh),
+            ("of", d.of.is_some() && k != NodeKind::Instance),
+            ("children", d.children.is_some() && k != NodeKind::Group),
+        ];
+        for (field, bad) in wrong {
+            if bad {
+                let kind = format!("{k:?}").to_lowercase();
+                return Err(self.src.error(
+                    at,
+                    format!("{path}.{field}"),
+                    format!("not a field of a {kind}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}

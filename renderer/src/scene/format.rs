@@ -1,0 +1,332 @@
+//! The scene file format: TOML (1.1, so inline tables may span lines), read with serde.
+//! Unknown fields are rejected. Every field is documented in renderer/docs/scene-format.md.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use toml::Spanned;
+
+/// A 3-vector in the file.
+pub type V3 = [f64; 3];
+
+/// The whole file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDesc {
+    /// The camera, in one of three forms.
+    pub camera: Spanned<CameraDesc>,
+    /// Render settings.
+    pub render: Spanned<RenderDesc>,
+    /// Light sources.
+    #[serde(default)]
+    pub lights: Vec<Spanned<LightDesc>>,
+    /// Named materials.
+    #[serde(default)]
+    pub materials: BTreeMap<String, Spanned<MaterialDesc>>,
+    /// Named definitions, placed by `instance` nodes.
+    #[serde(default)]
+    pub defs: BTreeMap<String, Spanned<NodeDesc>>,
+    /// The object tree.
+    #[serde(default)]
+    pub objects: Vec<Spanned<NodeDesc>>,
+}
+
+/// Camera forms. Each converts into the one viewing model.
+#[derive(Debug, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum CameraDesc {
+    /// The viewing model itself.
+    View {
+        /// View reference point r.
+        vrp: V3,
+        /// View-plane normal.
+        vpn: V3,
+        /// Up vector.
+        vup: V3,
+        /// Eye distance E.
+        e: f64,
+        /// W_l, W_r, W_b, W_t.
+        window: WindowDesc,
+    },
+    /// Look-at plus a field of view.
+    LookAt {
+        /// Eye.
+        from: V3,
+        /// Target.
+        at: V3,
+        /// Up vector.
+        up: V3,
+        /// Field of view in degrees.
+        fov: f64,
+        /// Which extent `fov` spans.
+        #[serde(default = "default_fov_axis")]
+        fov_axis: crate::camera::FovAxis,
+    },
+    /// POV-Ray style explicit vectors.
+    Povray {
+        /// Eye.
+        location: V3,
+        /// From the eye to the window centre.
+        direction: V3,
+        /// Full window width along u.
+        right: V3,
+        /// Full window height along v.
+        up: V3,
+    },
+}
+
+fn default_fov_axis() -> crate::camera::FovAxis {
+    crate::camera::FovAxis::Horizontal
+}
+
+/// The window on the view plane.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WindowDesc {
+    /// W_l.
+    pub left: f64,
+    /// W_r.
+    pub right: f64,
+    /// W_b.
+    pub bottom: f64,
+    /// W_t.
+    pub top: f64,
+}
+
+/// Render settings.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RenderDesc {
+    /// Pixel columns.
+    pub width: u32,
+    /// Pixel rows.
+    pub height: u32,
+    /// Samples per pixel.
+    #[serde(default = "one")]
+    pub samples: u32,
+    /// Maximum trace depth (POV-Ray's max_trace_level).
+    #[serde(default = "five")]
+    pub max_depth: u32,
+    /// Rays whose weight falls below this are not traced (POV-Ray's adc_bailout).
+    #[serde(default = "adc")]
+    pub adc_bailout: f64,
+    /// Colour of rays that hit nothing.
+    #[serde(default)]
+    pub background: V3,
+    /// Global ambient light (POV-Ray's ambient_light).
+    #[serde(default = "white")]
+    pub ambient_light: V3,
+}
+
+fn one() -> u32 {
+    1
+}
+fn five() -> u32 {
+    5
+}
+fn adc() -> f64 {
+    1.0 / 255.0
+}
+fn white() -> V3 {
+    [1.0; 3]
+}
+
+/// A point light.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightDesc {
+    /// Position.
+    pub position: V3,
+    /// Colour (intensity per channel).
+    #[serde(default = "white")]
+    pub color: V3,
+    /// Distance at which the fade factor is 1.
+    pub fade_distance: Option<f64>,
+    /// Fade exponent; fading is on when both fade fields are given and fade_power > 0.
+    pub fade_power: Option<f64>,
+}
+
+/// A material: POV-Ray's pigment and finish, parameter for parameter.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialDesc {
+    /// Pigment colour.
+    #[serde(default = "white")]
+    pub color: V3,
+    /// Pigment filter (filtered transparency).
+    #[serde(default)]
+    pub filter: f64,
+    /// Pigment transmit (unfiltered transparency).
+    #[serde(default)]
+    pub transmit: f64,
+    /// Ambient coefficient.
+    #[serde(default = "ambient")]
+    pub ambient: f64,
+    /// Emission coefficient.
+    #[serde(default)]
+    pub emission: f64,
+    /// Diffuse coefficient.
+    #[serde(default = "diffuse")]
+    pub diffuse: f64,
+    /// Diffuse exponent.
+    #[serde(default = "one_f")]
+    pub brilliance: f64,
+    /// Phong highlight amount.
+    #[serde(default)]
+    pub phong: f64,
+    /// Phong exponent.
+    #[serde(default = "phong_size")]
+    pub phong_size: f64,
+    /// Blinn specular amount.
+    #[serde(default)]
+    pub specular: f64,
+    /// Specular roughness (exponent 1/roughness).
+    #[serde(default = "roughness")]
+    pub roughness: f64,
+    /// Mirror reflection amount.
+    #[serde(default)]
+    pub reflection: f64,
+    /// Index of refraction of the interior.
+    #[serde(default = "one_f")]
+    pub ior: f64,
+}
+
+fn ambient() -> f64 {
+    0.1
+}
+fn diffuse() -> f64 {
+    0.6
+}
+fn one_f() -> f64 {
+    1.0
+}
+fn phong_size() -> f64 {
+    40.0
+}
+fn roughness() -> f64 {
+    0.05
+}
+
+/// Node kinds of the object tree.
+#[derive(Debug, Deserialize, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum NodeKind {
+    /// Unit sphere.
+    Sphere,
+    /// Plane y = 0.
+    Plane,
+    /// Cube [−1, 1]³.
+    Box,
+    /// Cylinder, y ∈ [−1, 1], radius 1.
+    Cylinder,
+    /// Cone, apex (0, 1, 0), base radius 1 at y = −1.
+    Cone,
+    /// Unit disk in y = 0.
+    Disk,
+    /// [−1, 1]² in y = 0.
+    Rectangle,
+    /// One triangle.
+    Triangle,
+    /// A Wavefront OBJ mesh.
+    Mesh,
+    /// A group of child nodes.
+    Group,
+    /// A placement of a named definition.
+    Instance,
+}
+
+/// A node of the object tree.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NodeDesc {
+    /// What the node is.
+    #[serde(rename = "type")]
+    pub kind: NodeKind,
+    /// Optional label, used in error messages.
+    pub name: Option<String>,
+    /// Material name; inherited from the parent when absent.
+    pub material: Option<Spanned<String>>,
+    /// Transform operations, applied in order (the first is applied to the object first).
+    #[serde(default)]
+    pub transform: Vec<Spanned<TransformOp>>,
+    /// Cylinder and cone: whether the ends are closed (default true).
+    pub capped: Option<bool>,
+    /// Triangle: vertices.
+    pub vertices: Option<Spanned<[V3; 3]>>,
+    /// Triangle: per-vertex shading normals.
+    pub normals: Option<Spanned<[V3; 3]>>,
+    /// Triangle: per-vertex uv.
+    pub uvs: Option<[[f64; 2]; 3]>,
+    /// Mesh: OBJ file, relative to the scene file.
+    pub file: Option<Spanned<String>>,
+    /// Instance: the definition's name.
+    pub of: Option<Spanned<String>>,
+    /// Group: children.
+    pub children: Option<Vec<Spanned<NodeDesc>>>,
+}
+
+/// One transform operation.
+#[derive(Debug, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum TransformOp {
+    /// Translation.
+    Translate(V3),
+    /// Rotation about an axis through the origin, in degrees.
+    Rotate {
+        /// Axis (any non-zero length).
+        axis: V3,
+        /// Angle in degrees.
+        degrees: f64,
+    },
+    /// Uniform or per-axis scale.
+    Scale(ScaleArg),
+    /// Shear: `x += xy·y + xz·z`, `y += yx·x + yz·z`, `z += zx·x + zy·y`.
+    Shear(ShearDesc),
+    /// Full affine matrix: four rows of three, row-vector convention (POV-Ray's
+    /// `matrix`): `p' = p·M + row4`.
+    Matrix([V3; 4]),
+}
+
+/// A uniform or per-axis scale.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub enum ScaleArg {
+    /// The same factor on every axis.
+    Uniform(f64),
+    /// One factor per axis.
+    PerAxis(V3),
+}
+
+/// Shear factors; missing ones are 0.
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct ShearDesc {
+    /// x += xy·y.
+    #[serde(default)]
+    pub xy: f64,
+    /// x += xz·z.
+    #[serde(default)]
+    pub xz: f64,
+    /// y += yx·x.
+    #[serde(default)]
+    pub yx: f64,
+    /// y += yz·z.
+    #[serde(default)]
+    pub yz: f64,
+    /// z += zx·x.
+    #[serde(default)]
+    pub zx: f64,
+    /// z += zy·y.
+    #[serde(default)]
+    pub zy: f64,
+}
+
+/// Parses scene text; on failure returns the byte span and the field path.
+pub fn parse(text: &str) -> Result<SceneDesc, (Option<std::ops::Range<usize>>, String, String)> {
+    let de = toml::Deserializer::parse(text)
+        .map_err(|e| (e.span(), String::new(), e.message().to_string()))?;
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner();
+        (inner.span(), path, inner.message().to_string())
+    })
+}

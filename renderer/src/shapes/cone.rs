@@ -1,0 +1,77 @@
+//! The cone with apex (0, 1, 0) and base radius 1 at y = −1: `x² + z² = k²(1 − y)²` with
+//! k = ½, for y ∈ [−1, 1], and an optional base cap.
+
+use super::{azimuth, local_hit};
+use crate::aggregate::Hit;
+use crate::ray::Ray;
+use crate::real::{Real, Vec2, Vec3};
+
+const K2: Real = 0.25;
+
+/// Closest hit. Side normal is the gradient `(x, k²(1 − y), z)`, and +y at the apex
+/// itself, where the gradient vanishes. Cap normal −y.
+#[inline]
+pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hit> {
+    let (o, d) = (ray.o, ray.d);
+    let mut best: Option<Hit> = None;
+    let mut t_max = t_max;
+    // w = 1 − y.
+    let (ow, dw) = (1.0 - o.y, -d.y);
+    let a = d.x * d.x + d.z * d.z - K2 * dw * dw;
+    let b = o.x * d.x + o.z * d.z - K2 * ow * dw;
+    let c = o.x * o.x + o.z * o.z - K2 * ow * ow;
+    let mut roots = [Real::NAN; 2];
+    let scale = d.length_squared();
+    if a.abs() <= scale * Real::EPSILON {
+        // The ray is parallel to a generator line: one root.
+        if b != 0.0 {
+            roots[0] = -c / (2.0 * b);
+        }
+    } else {
+        let disc = b * b - a * c;
+        if disc >= 0.0 {
+            let s = disc.sqrt();
+            let q = -(b + s.copysign(b));
+            if q != 0.0 {
+                roots = [q / a, c / q];
+            } else {
+                roots = [0.0, 0.0];
+            }
+            if roots[0] > roots[1] {
+                roots.swap(0, 1);
+            }
+        }
+    }
+    for t in roots {
+        if t > t_min && t < t_max {
+            let p = ray.at(t);
+            if (-1.0..=1.0).contains(&p.y) {
+                let mut n = Vec3::new(p.x, K2 * (1.0 - p.y), p.z);
+                if n == Vec3::ZERO {
+                    n = Vec3::Y;
+                }
+                best = Some(local_hit(
+                    t,
+                    n,
+                    Vec2::new(azimuth(p.x, p.z), (p.y + 1.0) * 0.5),
+                ));
+                t_max = t;
+                break;
+            }
+        }
+    }
+    if capped && d.y != 0.0 {
+        let t = (-1.0 - o.y) / d.y;
+        if t > t_min && t < t_max {
+            let p = ray.at(t);
+            if p.x * p.x + p.z * p.z <= 1.0 {
+                best = Some(local_hit(
+                    t,
+                    -Vec3::Y,
+                    Vec2::new((p.x + 1.0) * 0.5, (p.z + 1.0) * 0.5),
+                ));
+            }
+        }
+    }
+    best
+}

@@ -1,0 +1,58 @@
+//! The cube [−1, 1]³, by the slab method. The normal is that of the slab the ray enters
+//! through (or leaves through, when it starts inside).
+
+use super::local_hit;
+use crate::aggregate::Hit;
+use crate::ray::Ray;
+use crate::real::{Real, Vec2, Vec3};
+
+/// Closest hit on the cube.
+#[inline]
+pub fn intersect(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+    let mut near = Real::NEG_INFINITY;
+    let mut far = Real::INFINITY;
+    let (mut near_axis, mut far_axis) = (0usize, 0usize);
+    for k in 0..3 {
+        let (o, d) = (ray.o[k], ray.d[k]);
+        if d == 0.0 {
+            if !(-1.0..=1.0).contains(&o) {
+                return None;
+            }
+            continue;
+        }
+        let inv = 1.0 / d;
+        let (mut a, mut b) = ((-1.0 - o) * inv, (1.0 - o) * inv);
+        if a > b {
+            std::mem::swap(&mut a, &mut b);
+        }
+        if a > near {
+            near = a;
+            near_axis = k;
+        }
+        if b < far {
+            far = b;
+            far_axis = k;
+        }
+    }
+    if near > far {
+        return None;
+    }
+    let (t, axis, entering) = if near > t_min && near < t_max {
+        (near, near_axis, true)
+    } else if far > t_min && far < t_max {
+        (far, far_axis, false)
+    } else {
+        return None;
+    };
+    let mut n = Vec3::ZERO;
+    let s = if entering {
+        -ray.d[axis].signum()
+    } else {
+        ray.d[axis].signum()
+    };
+    n[axis] = s;
+    let p = ray.at(t);
+    let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+    let uv = Vec2::new((p[a] + 1.0) * 0.5, (p[b] + 1.0) * 0.5);
+    Some(local_hit(t, n, uv))
+}

@@ -1,0 +1,54 @@
+//! The flat primitives in the plane y = 0 with normal +y: the infinite plane, the unit
+//! disk and the rectangle [−1, 1]². A ray parallel to the plane never hits it.
+
+use super::local_hit;
+use crate::aggregate::Hit;
+use crate::ray::Ray;
+use crate::real::{Real, Vec2, Vec3};
+
+#[inline]
+fn plane_t(ray: &Ray, t_min: Real, t_max: Real) -> Option<Real> {
+    if ray.d.y == 0.0 {
+        return None;
+    }
+    let t = -ray.o.y / ray.d.y;
+    (t > t_min && t < t_max).then_some(t)
+}
+
+/// The plane y = 0; uv are the hit's x and z.
+#[inline]
+pub fn plane(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+    let t = plane_t(ray, t_min, t_max)?;
+    let p = ray.at(t);
+    Some(local_hit(t, Vec3::Y, Vec2::new(p.x, p.z)))
+}
+
+/// The unit disk; uv map [−1, 1]² to [0, 1]².
+#[inline]
+pub fn disk(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+    let t = plane_t(ray, t_min, t_max)?;
+    let p = ray.at(t);
+    if p.x * p.x + p.z * p.z > 1.0 {
+        return None;
+    }
+    Some(local_hit(
+        t,
+        Vec3::Y,
+        Vec2::new((p.x + 1.0) * 0.5, (p.z + 1.0) * 0.5),
+    ))
+}
+
+/// The rectangle [−1, 1]²; uv map it to [0, 1]².
+#[inline]
+pub fn rectangle(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+    let t = plane_t(ray, t_min, t_max)?;
+    let p = ray.at(t);
+    if p.x.abs() > 1.0 || p.z.abs() > 1.0 {
+        return None;
+    }
+    Some(local_hit(
+        t,
+        Vec3::Y,
+        Vec2::new((p.x + 1.0) * 0.5, (p.z + 1.0) * 0.5),
+    ))
+}

@@ -1,0 +1,213 @@
+//! Affine transforms, named destination-from-source (`world_from_object`).
+//!
+//! DEVELOPERS.md writes points as row vectors, `p' = p M + d`. glam uses column vectors, so
+//! the stored `m` is the transpose of that `M`: `p' = m·p + d`. Both keep their inverse,
+//! computed once in `f64` when the scene is built. Points, vectors and normals map through
+//! separate methods:
+//! - points: `m·p + d`;
+//! - vectors (ray directions): `m·v`, never renormalized, so that ray parameters agree
+//!   across spaces;
+//! - normals: `m⁻ᵀ·n` (the spec's `n M⁻ᵀ`), read straight from the stored inverse.
+
+use crate::aabb::Aabb;
+use crate::ray::Ray;
+use crate::real::{Mat3, Real, Vec3};
+use glam::{DMat3, DVec3};
+
+/// Largest accepted condition number (Frobenius norms of `m` and `m⁻¹`). Past this the
+/// matrix is singular for practical purposes even in `f64`.
+pub const MAX_CONDITION: f64 = 1e14;
+
+/// Why a matrix cannot be an instance transform.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum TransformError {
+    /// An entry is NaN or infinite.
+    #[error("the transform has a non-finite entry")]
+    NonFinite,
+    /// The determinant is zero or the matrix is too ill-conditioned to invert.
+    #[error("the transform is singular (determinant {det:e}, condition number {cond:e})")]
+    Singular {
+        /// The determinant.
+        det: f64,
+        /// Frobenius condition number.
+        cond: f64,
+    },
+}
+
+/// An affine map in `f64`, used while building scenes: `p' = m·p + d`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Affine64 {
+    /// Linear part (column-vector convention).
+    pub m: DMat3,
+    /// Translation.
+    pub d: DVec3,
+}
+
+impl Default for Affine64 {
+    fn default() -> Self {
+        Self::IDENTITY
+    }
+}
+
+impl Affine64 {
+    /// The identity.
+    pub const IDENTITY: Affine64 = Affine64 {
+        m: DMat3::IDENTITY,
+        d: DVec3::ZERO,
+    };
+
+    /// A translation by `d`.
+    pub fn translate(d: DVec3) -> Self {
+        Affine64 {
+            m: DMat3::IDENTITY,
+            d,
+        }
+    }
+
+    /// A linear map.
+    pub fn linear(m: DMat3) -> Self {
+        Affine64 { m, d: DVec3::ZERO }
+    }
+
+    /// `self ∘ inner`: apply `inner` first, then `self`.
+    pub fn compose(&self, inner: &Affine64) -> Affine64 {
+        Affine64 {
+            m: self.m * inner.m,
+            d: self.m * inner.d + self.d,
+        }
+    }
+
+    /// Maps a point.
+    pub fn point(&self, p: DVec3) -> DVec3 {
+        self.m * p + self.d
+    }
+
+    /// Whether this is exactly the identity.
+    pub fn is_identity(&self) -> bool {
+        *self == Self::IDENTITY
+    }
+
+    /// Checks that the map is finite and invertible and returns the inverse.
+    pub fn inverse(&self) -> Result<Affine64, TransformError> {
+        if !self.m.is_finite() || !self.d.is_finite() {
+            return Err(TransformError::NonFinite);
+        }
+        let det = self.m.determinant();
+        let inv = if det != 0.0 {
+            self.m.inverse()
+        } else {
+            DMat3::from_cols_array(&[f64::NAN; 9])
+        };
+        let frob =
+            |a: &DMat3| -> f64 { a.to_cols_array().iter().map(|x| x * x).sum::<f64>().sqrt() };
+        let cond = frob(&self.m) * frob(&inv);
+        if det == 0.0 || !inv.is_finite() || !cond.is_finite() || cond > MAX_CONDITION {
+            return Err(TransformError::Singular { det, cond });
+        }
+        Ok(Affine64 {
+            m: inv,
+            d: -(inv * self.d),
+        })
+    }
+}
+
+/// A validated affine transform in renderer precision with its cached inverse.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    m: Mat3,
+    d: Vec3,
+    inv: Mat3,
+    inv_d: Vec3,
+}
+
+fn to_real(m: &DMat3) -> Mat3 {
+    Mat3::from_cols_array(&m.to_cols_array().map(|x| x as Real))
+}
+
+impl Transform {
+    /// Validates `a` (finite, invertible in `f64` and in `Real`) and caches its inverse.
+    pub fn new(a: &Affine64) -> Result<Self, TransformError> {
+        let inv = a.inverse()?;
+        let t = Transform {
+            m: to_real(&a.m),
+            d: crate::real::vec3(a.d),
+            inv: to_real(&inv.m),
+            inv_d: crate::real::vec3(inv.d),
+        };
+        let finite = t.m.is_finite() && t.d.is_finite() && t.inv.is_finite() && t.inv_d.is_finite();
+        let real_det = t.m.determinant();
+        if !finite || real_det == 0.0 || !real_det.is_finite() {
+            return Err(TransformError::Singular {
+                det: real_det as f64,
+                cond: f64::INFINITY,
+            });
+        }
+        Ok(t)
+    }
+
+    /// Linear part, `world_from_object` (column-vector convention).
+    pub fn matrix(&self) -> Mat3 {
+        self.m
+    }
+
+    /// Translation part.
+    pub fn translation(&self) -> Vec3 {
+        self.d
+    }
+
+    /// Linear part of the inverse.
+    pub fn inverse_matrix(&self) -> Mat3 {
+        self.inv
+    }
+
+    /// Maps a point to the outer space: `m·p + d`.
+    #[inline]
+    pub fn point(&self, p: Vec3) -> Vec3 {
+        self.m * p + self.d
+    }
+
+    /// Maps a vector to the outer space: `m·v`.
+    #[inline]
+    pub fn vector(&self, v: Vec3) -> Vec3 {
+        self.m * v
+    }
+
+    /// Maps a normal to the outer space: `m⁻ᵀ·n` (not renormalized).
+    #[inline]
+    pub fn normal(&self, n: Vec3) -> Vec3 {
+        self.inv.transpose() * n
+    }
+
+    /// Maps a point to the inner space: `m⁻¹·(p − d)`.
+    #[inline]
+    pub fn inv_point(&self, p: Vec3) -> Vec3 {
+        self.inv * (p - self.d)
+    }
+
+    /// Maps a vector to the inner space: `m⁻¹·v`.
+    #[inline]
+    pub fn inv_vector(&self, v: Vec3) -> Vec3 {
+        self.inv * v
+    }
+
+    /// Maps a ray to the inner space. The direction is not renormalized.
+    #[inline]
+    pub fn inv_ray(&self, r: &Ray) -> Ray {
+        Ray::new(self.inv_point(r.o), self.inv_vector(r.d))
+    }
+
+    /// Bounds of the image of a box (the box of its eight mapped corners).
+    pub fn bounds(&self, b: &Aabb) -> Aabb {
+        if !b.is_finite() {
+            return Aabb {
+                min: Vec3::splat(Real::NEG_INFINITY),
+                max: Vec3::splat(Real::INFINITY),
+            };
+        }
+        let mut out = Aabb::EMPTY;
+        for c in b.corners() {
+            out.grow(self.point(c));
+        }
+        out
+    }
+}
