@@ -22,6 +22,10 @@ pub const INHERIT: u32 = u32::MAX;
 pub struct Hit {
     /// Ray parameter.
     pub t: Real,
+    /// Hit point (re-projected onto the surface where the shape can).
+    pub p: Vec3,
+    /// Per-component bound on the rounding error of `p`.
+    pub err: Vec3,
     /// Outward geometric normal (not normalized).
     pub n_geo: Vec3,
     /// Shading normal (not normalized).
@@ -37,9 +41,11 @@ pub struct Hit {
 impl Hit {
     /// A bare hit: material and object id unassigned.
     #[inline]
-    pub fn new(t: Real, n_geo: Vec3, n_shade: Vec3, uv: Vec2) -> Self {
+    pub fn new(t: Real, p: Vec3, err: Vec3, n_geo: Vec3, n_shade: Vec3, uv: Vec2) -> Self {
         Hit {
             t,
+            p,
+            err,
             n_geo,
             n_shade,
             uv,
@@ -78,6 +84,7 @@ impl Instance {
         let mut h = match &self.xf {
             Some(x) => {
                 let mut h = self.shape.intersect(&x.inv_ray(ray), t_min, t_max)?;
+                (h.p, h.err) = x.point_with_error(h.p, h.err);
                 h.n_geo = x.normal(h.n_geo);
                 h.n_shade = x.normal(h.n_shade);
                 h

@@ -6,10 +6,15 @@ pub mod aabb;
 pub mod aggregate;
 pub mod bvh;
 pub mod camera;
+pub mod output;
 pub mod ray;
 pub mod real;
+pub mod render;
+pub mod sampler;
 pub mod scene;
+pub mod shading;
 pub mod shapes;
+pub mod spawn;
 pub mod transform;
 
 pub use aggregate::{Aggregate, Hit, Instance};

@@ -166,6 +166,20 @@ impl Transform {
         self.m * p + self.d
     }
 
+    /// Maps a point and its error bound to the outer space (pbrt's rule): the new bound is
+    /// `γ(3)·(|m|·|p| + |d|) + (1 + γ(3))·|m|·err`.
+    #[inline]
+    pub fn point_with_error(&self, p: Vec3, err: Vec3) -> (Vec3, Vec3) {
+        let am = Mat3::from_cols(
+            self.m.x_axis.abs(),
+            self.m.y_axis.abs(),
+            self.m.z_axis.abs(),
+        );
+        let g = crate::real::gamma(3);
+        let e = (am * p.abs() + self.d.abs()) * g + am * err * (1.0 + g);
+        (self.point(p), e)
+    }
+
     /// Maps a vector to the outer space: `m·v`.
     #[inline]
     pub fn vector(&self, v: Vec3) -> Vec3 {

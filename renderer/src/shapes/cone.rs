@@ -4,7 +4,7 @@
 use super::{azimuth, local_hit};
 use crate::aggregate::Hit;
 use crate::ray::Ray;
-use crate::real::{Real, Vec2, Vec3};
+use crate::real::{gamma, Real, Vec2, Vec3};
 
 const K2: Real = 0.25;
 
@@ -44,17 +44,16 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
     }
     for t in roots {
         if t > t_min && t < t_max {
-            let p = ray.at(t);
-            if (-1.0..=1.0).contains(&p.y) {
+            let (t, p) = refine(ray, t);
+            if (-1.0..=1.0).contains(&p.y) && t > t_min && t < t_max {
                 let mut n = Vec3::new(p.x, K2 * (1.0 - p.y), p.z);
                 if n == Vec3::ZERO {
                     n = Vec3::Y;
                 }
-                best = Some(local_hit(
-                    t,
-                    n,
-                    Vec2::new(azimuth(p.x, p.z), (p.y + 1.0) * 0.5),
-                ));
+                // After the Newton step the residual is rounding in F itself.
+                let err = (p.abs() + Vec3::ONE) * gamma(8);
+                let uv = Vec2::new(azimuth(p.x, p.z), (p.y + 1.0) * 0.5);
+                best = Some(local_hit(t, p, err, n, uv));
                 t_max = t;
                 break;
             }
@@ -63,10 +62,14 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
     if capped && d.y != 0.0 {
         let t = (-1.0 - o.y) / d.y;
         if t > t_min && t < t_max {
-            let p = ray.at(t);
+            let mut p = ray.at(t);
             if p.x * p.x + p.z * p.z <= 1.0 {
+                p.y = -1.0;
+                let err = Vec3::new(p.x.abs(), 0.0, p.z.abs()) * gamma(4);
                 best = Some(local_hit(
                     t,
+                    p,
+                    err,
                     -Vec3::Y,
                     Vec2::new((p.x + 1.0) * 0.5, (p.z + 1.0) * 0.5),
                 ));
@@ -74,4 +77,21 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
         }
     }
     best
+}
+
+/// One Newton step on `F(o + t·d) = 0`, evaluated at the point (not through the
+/// quadratic's coefficients, whose cancellation is what the step removes).
+#[inline]
+fn refine(ray: &Ray, t: Real) -> (Real, Vec3) {
+    let p = ray.at(t);
+    let w = 1.0 - p.y;
+    let f = p.x * p.x + p.z * p.z - K2 * w * w;
+    let df = 2.0 * (p.x * ray.d.x + p.z * ray.d.z + K2 * w * ray.d.y);
+    if df != 0.0 && df.is_finite() {
+        let t2 = t - f / df;
+        if t2.is_finite() {
+            return (t2, ray.at(t2));
+        }
+    }
+    (t, p)
 }

@@ -4,7 +4,7 @@
 use super::local_hit;
 use crate::aggregate::Hit;
 use crate::ray::Ray;
-use crate::real::{Real, Vec2, Vec3};
+use crate::real::{gamma, Real, Vec2, Vec3};
 
 /// Closest hit on the cube.
 #[inline]
@@ -51,8 +51,12 @@ pub fn intersect(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         ray.d[axis].signum()
     };
     n[axis] = s;
-    let p = ray.at(t);
+    // Snap the hit coordinate onto the face; the other two carry rounding error.
+    let mut p = ray.at(t);
+    p[axis] = s;
+    let mut err = p.abs() * gamma(4);
+    err[axis] = 0.0;
     let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
     let uv = Vec2::new((p[a] + 1.0) * 0.5, (p[b] + 1.0) * 0.5);
-    Some(local_hit(t, n, uv))
+    Some(local_hit(t, p, err, n, uv))
 }

@@ -4,7 +4,15 @@
 use super::local_hit;
 use crate::aggregate::Hit;
 use crate::ray::Ray;
-use crate::real::{Real, Vec2, Vec3};
+use crate::real::{gamma, Real, Vec2, Vec3};
+
+/// The hit point snapped exactly onto y = 0; only x and z carry rounding error.
+#[inline]
+fn on_plane(ray: &Ray, t: Real) -> (Vec3, Vec3) {
+    let mut p = ray.at(t);
+    p.y = 0.0;
+    (p, Vec3::new(p.x.abs(), 0.0, p.z.abs()) * gamma(4))
+}
 
 #[inline]
 fn plane_t(ray: &Ray, t_min: Real, t_max: Real) -> Option<Real> {
@@ -19,20 +27,22 @@ fn plane_t(ray: &Ray, t_min: Real, t_max: Real) -> Option<Real> {
 #[inline]
 pub fn plane(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     let t = plane_t(ray, t_min, t_max)?;
-    let p = ray.at(t);
-    Some(local_hit(t, Vec3::Y, Vec2::new(p.x, p.z)))
+    let (p, err) = on_plane(ray, t);
+    Some(local_hit(t, p, err, Vec3::Y, Vec2::new(p.x, p.z)))
 }
 
 /// The unit disk; uv map [−1, 1]² to [0, 1]².
 #[inline]
 pub fn disk(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     let t = plane_t(ray, t_min, t_max)?;
-    let p = ray.at(t);
+    let (p, err) = on_plane(ray, t);
     if p.x * p.x + p.z * p.z > 1.0 {
         return None;
     }
     Some(local_hit(
         t,
+        p,
+        err,
         Vec3::Y,
         Vec2::new((p.x + 1.0) * 0.5, (p.z + 1.0) * 0.5),
     ))
@@ -42,12 +52,14 @@ pub fn disk(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
 #[inline]
 pub fn rectangle(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     let t = plane_t(ray, t_min, t_max)?;
-    let p = ray.at(t);
+    let (p, err) = on_plane(ray, t);
     if p.x.abs() > 1.0 || p.z.abs() > 1.0 {
         return None;
     }
     Some(local_hit(
         t,
+        p,
+        err,
         Vec3::Y,
         Vec2::new((p.x + 1.0) * 0.5, (p.z + 1.0) * 0.5),
     ))

@@ -170,6 +170,7 @@ impl Mesh {
         Some(surface(
             t,
             b,
+            [p0, p1, p2],
             (p1 - p0).cross(p2 - p0),
             n.as_ref(),
             uv.as_ref(),

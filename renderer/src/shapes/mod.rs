@@ -64,10 +64,10 @@ pub enum Shape {
     Group(Arc<Aggregate>),
 }
 
-/// A hit in a shape's object space.
+/// A hit in a shape's object space, with the point's error bound and one normal.
 #[inline]
-pub(crate) fn local_hit(t: Real, n: Vec3, uv: Vec2) -> Hit {
-    Hit::new(t, n, n, uv)
+pub(crate) fn local_hit(t: Real, p: Vec3, err: Vec3, n: Vec3, uv: Vec2) -> Hit {
+    Hit::new(t, p, err, n, n, uv)
 }
 
 impl Shape {

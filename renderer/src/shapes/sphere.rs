@@ -5,7 +5,7 @@
 use super::{azimuth, local_hit, stable_roots};
 use crate::aggregate::Hit;
 use crate::ray::Ray;
-use crate::real::{Real, Vec2};
+use crate::real::{gamma, Real, Vec2};
 
 /// Closest hit on the unit sphere. The normal is the hit point (outward).
 #[inline]
@@ -26,8 +26,10 @@ pub fn intersect(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     } else {
         return None;
     };
+    // Re-project onto the surface; the error of the result is γ(5)·|p| (pbrt).
     let p = ray.at(t);
-    let n = p.normalize_or(p);
-    let v = 1.0 - n.y.clamp(-1.0, 1.0).acos() / (std::f64::consts::PI as Real);
-    Some(local_hit(t, n, Vec2::new(azimuth(n.x, n.z), v)))
+    let p = p.normalize_or(p);
+    let err = p.abs() * gamma(5);
+    let v = 1.0 - p.y.clamp(-1.0, 1.0).acos() / (std::f64::consts::PI as Real);
+    Some(local_hit(t, p, err, p, Vec2::new(azimuth(p.x, p.z), v)))
 }

@@ -7,7 +7,7 @@
 use crate::aabb::Aabb;
 use crate::aggregate::Hit;
 use crate::ray::Ray;
-use crate::real::{Real, Vec2, Vec3};
+use crate::real::{gamma, Real, Vec2, Vec3};
 
 /// A ray prepared for many triangle tests.
 #[derive(Clone, Copy, Debug)]
@@ -125,6 +125,7 @@ impl Triangle {
         Some(surface(
             t,
             bary,
+            self.p,
             self.normal(),
             self.n.as_ref(),
             self.uv.as_ref(),
@@ -137,10 +138,15 @@ impl Triangle {
 pub(crate) fn surface(
     t: Real,
     b: [Real; 3],
+    v: [Vec3; 3],
     n_geo: Vec3,
     n: Option<&[Vec3; 3]>,
     uv: Option<&[Vec2; 3]>,
 ) -> Hit {
+    // The point from barycentrics, with pbrt's bound γ(7)·Σ|bᵢ·pᵢ|.
+    let (q0, q1, q2) = (v[0] * b[0], v[1] * b[1], v[2] * b[2]);
+    let p = q0 + q1 + q2;
+    let err = (q0.abs() + q1.abs() + q2.abs()) * gamma(7);
     let n_shade = match n {
         Some(n) => {
             let s = n[0] * b[0] + n[1] * b[1] + n[2] * b[2];
@@ -156,5 +162,5 @@ pub(crate) fn surface(
         Some(uv) => uv[0] * b[0] + uv[1] * b[1] + uv[2] * b[2],
         None => Vec2::new(b[1], b[2]),
     };
-    Hit::new(t, n_geo, n_shade, uv)
+    Hit::new(t, p, err, n_geo, n_shade, uv)
 }

@@ -1,0 +1,112 @@
+//! The `renderer` command line: `renderer render SCENE -o OUT [--aov]`.
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+use renderer::output::{self, ToneMap};
+use renderer::render::{self, Options};
+use renderer::scene::Scene;
+use renderer::spawn::Spawn;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(version, about = "A verified classic ray tracer")]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Render a scene file to PNG (8-bit sRGB) or EXR (32-bit float, linear).
+    Render {
+        /// The scene file (TOML; see renderer/docs/scene-format.md).
+        scene: PathBuf,
+        /// Output file; the format follows the extension (.png or .exr).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Add geometry channels to the EXR: Z, N.X/Y/Z, P.X/Y/Z, objectId.
+        #[arg(long)]
+        aov: bool,
+        /// Worker threads (default: every core).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// How PNG output maps intensities to 8 bits.
+        #[arg(long, value_enum, default_value_t = ToneMap::Srgb)]
+        map: ToneMap,
+        /// Self-intersection strategy for secondary rays: robust, or fixed=EPS (POV-Ray's 1e-3), or none.
+        #[arg(long, default_value = "robust", value_parser = parse_spawn)]
+        spawn: Spawn,
+    },
+}
+
+fn parse_spawn(s: &str) -> Result<Spawn, String> {
+    match s {
+        "robust" => Ok(Spawn::Robust),
+        "none" => Ok(Spawn::None),
+        _ => s
+            .strip_prefix("fixed=")
+            .and_then(|e| e.parse::<f64>().ok())
+            .filter(|e| e.is_finite() && *e >= 0.0)
+            .map(Spawn::Fixed)
+            .ok_or_else(|| format!("'{s}': expected robust, none or fixed=EPS")),
+    }
+}
+
+fn main() -> ExitCode {
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn run() -> Result<()> {
+    match Cli::parse().cmd {
+        Cmd::Render {
+            scene,
+            output: out,
+            aov,
+            threads,
+            map,
+            spawn,
+        } => {
+            let ext = out
+                .extension()
+                .and_then(|e| e.to_str())
+                .unwrap_or("")
+                .to_ascii_lowercase();
+            anyhow::ensure!(
+                ext == "png" || ext == "exr",
+                "{}: unknown output format (use .png or .exr)",
+                out.display()
+            );
+            anyhow::ensure!(!aov || ext == "exr", "--aov needs an .exr output");
+            let s = Scene::load(&scene)?;
+            let t0 = std::time::Instant::now();
+            let img = render::render(
+                &s,
+                &Options {
+                    threads,
+                    aov,
+                    progress: true,
+                    spawn,
+                },
+            );
+            let secs = t0.elapsed().as_secs_f64();
+            output::write(&img, &out, map).with_context(|| format!("writing {}", out.display()))?;
+            eprintln!(
+                "{}: {}x{} px, {} spp, {:.3} s -> {}",
+                scene.display(),
+                img.width,
+                img.height,
+                s.settings.samples,
+                secs,
+                out.display()
+            );
+            Ok(())
+        }
+    }
+}

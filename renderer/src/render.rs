@@ -1,0 +1,166 @@
+//! The render loop: rows in parallel through rayon, each pixel independent, so the
+//! output is bit-identical for any thread count. Nothing here allocates per pixel.
+
+use crate::real::{dvec3, Real};
+use crate::sampler::pixel_offset;
+use crate::scene::{Color, Scene};
+use crate::shading::Shader;
+use crate::spawn::Spawn;
+use rayon::prelude::*;
+
+/// Geometry channels for every pixel, from the pixel-centre ray. Misses are 0.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Aov {
+    /// Euclidean distance from the eye to the hit.
+    pub z: Vec<f32>,
+    /// Unit, outward, world-space geometric normal (3 per pixel).
+    pub n: Vec<f32>,
+    /// World hit point (3 per pixel).
+    pub p: Vec<f32>,
+    /// 1-based object id, 0 for background.
+    pub object_id: Vec<f32>,
+}
+
+/// A rendered image: linear RGB, row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// RGB, 3 floats per pixel.
+    pub rgb: Vec<f32>,
+    /// Geometry channels, when requested.
+    pub aov: Option<Aov>,
+    /// Pixel channels that came out NaN or infinite and were written as 0.
+    pub non_finite: usize,
+}
+
+/// Render options that are not part of the scene.
+#[derive(Clone, Debug, Default)]
+pub struct Options {
+    /// Worker threads; `None` uses every core.
+    pub threads: Option<usize>,
+    /// Compute the geometry channels.
+    pub aov: bool,
+    /// Show a progress bar (only when stderr is a terminal).
+    pub progress: bool,
+    /// Self-intersection strategy.
+    pub spawn: Spawn,
+}
+
+/// Renders `scene`.
+pub fn render(scene: &Scene, opts: &Options) -> Image {
+    match opts.threads {
+        Some(n) => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n.max(1))
+                .build()
+                .expect("a rayon thread pool with a fixed thread count");
+            pool.install(|| render_in_pool(scene, opts))
+        }
+        None => render_in_pool(scene, opts),
+    }
+}
+
+fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
+    let (w, h) = (
+        scene.settings.width as usize,
+        scene.settings.height as usize,
+    );
+    let spp = scene.settings.samples;
+    let shader = Shader::new(scene, opts.spawn);
+    let bar = progress_bar(h as u64, opts.progress);
+    let mut rgb = vec![0f32; w * h * 3];
+    let mut aov = opts.aov.then(|| Aov {
+        z: vec![0.0; w * h],
+        n: vec![0.0; w * h * 3],
+        p: vec![0.0; w * h * 3],
+        object_id: vec![0.0; w * h],
+    });
+    let non_finite: usize = rgb
+        .par_chunks_mut(w * 3)
+        .enumerate()
+        .map(|(j, row)| {
+            let mut bad = 0;
+            for i in 0..w {
+                let pixel = (j * w + i) as u64;
+                let mut sum = Color::ZERO;
+                for s in 0..spp {
+                    let (dx, dy) = pixel_offset(pixel, s, spp);
+                    let ray = scene.camera.ray_at(i as f64 + dx, j as f64 + dy);
+                    sum += shader.trace_primary(&ray);
+                }
+                let c = sum / spp as f32;
+                for k in 0..3 {
+                    let v = c[k];
+                    row[3 * i + k] = if v.is_finite() {
+                        v
+                    } else {
+                        bad += 1;
+                        0.0
+                    };
+                }
+            }
+            if let Some(b) = &bar {
+                b.inc(1);
+            }
+            bad
+        })
+        .sum();
+    if let Some(a) = aov.as_mut() {
+        fill_aov(scene, a, w);
+    }
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    Image {
+        width: w as u32,
+        height: h as u32,
+        rgb,
+        aov,
+        non_finite,
+    }
+}
+
+fn fill_aov(scene: &Scene, a: &mut Aov, w: usize) {
+    let eye = dvec3(scene.camera.eye());
+    a.z.par_chunks_mut(w)
+        .zip(a.n.par_chunks_mut(w * 3))
+        .zip(a.p.par_chunks_mut(w * 3))
+        .zip(a.object_id.par_chunks_mut(w))
+        .enumerate()
+        .for_each(|(j, (((z, n), p), id))| {
+            for i in 0..w {
+                let ray = scene.camera.pixel_ray(i as u32, j as u32);
+                let Some(hit) = scene.root.intersect(&ray, 0.0, Real::INFINITY) else {
+                    continue;
+                };
+                let hp = dvec3(hit.p);
+                let ng = dvec3(hit.n_geo).normalize_or_zero();
+                if !(hp.is_finite() && ng.is_finite()) {
+                    continue;
+                }
+                z[i] = (hp - eye).length() as f32;
+                for k in 0..3 {
+                    n[3 * i + k] = ng[k] as f32;
+                    p[3 * i + k] = hp[k] as f32;
+                }
+                id[i] = hit.object_id as f32;
+            }
+        });
+}
+
+fn progress_bar(rows: u64, wanted: bool) -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    if !wanted || !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = indicatif::ProgressBar::new(rows);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "{bar:40} {pos}/{len} rows, {elapsed} elapsed, ETA {eta}",
+    ) {
+        bar.set_style(style);
+    }
+    Some(bar)
+}
