@@ -25,7 +25,7 @@ pub enum TransformError {
     #[error("the transform has a non-finite entry")]
     NonFinite,
     /// The determinant is zero or the matrix is too ill-conditioned to invert.
-    #[error("the transform is singular (determinant {det:e}, condition number {cond:e})")]
+    #[error("the transform is singular (determinant {det:e}{})", if cond.is_finite() { format!(", condition number {cond:e}") } else { String::new() })]
     Singular {
         /// The determinant.
         det: f64,

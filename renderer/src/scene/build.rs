@@ -74,7 +74,7 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
     for (k, l) in desc.lights.iter().enumerate() {
         let d = l.get_ref();
         let field = format!("lights[{k}]");
-        let err = |f: &str, m: &str| src.error(l.span().start, format!("{field}.{f}"), m);
+        let err = |f: &str, m: &str| src.key_error(l.span(), f, format!("{field}.{f}"), m);
         if d.position.iter().any(|x| !x.is_finite()) {
             return Err(err("position", "must be finite"));
         }
@@ -119,31 +119,21 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
             ("reflection", d.reflection),
             ("ior", d.ior),
         ];
-        for (f, x) in scalars {
+        let err =
+            |key: &str, msg: &str| src.key_error(m.span(), key, format!("{field}.{key}"), msg);
+        for (key, x) in scalars {
             if !x.is_finite() || x < 0.0 {
-                return Err(src.error(
-                    m.span().start,
-                    format!("{field}.{f}"),
-                    "must be finite and ≥ 0",
-                ));
+                return Err(err(key, "must be finite and ≥ 0"));
             }
         }
         if d.color.iter().any(|x| !x.is_finite() || *x < 0.0) {
-            return Err(src.error(
-                m.span().start,
-                format!("{field}.color"),
-                "components must be finite and ≥ 0",
-            ));
+            return Err(err("color", "components must be finite and ≥ 0"));
         }
         if d.roughness == 0.0 && d.specular > 0.0 {
-            return Err(src.error(
-                m.span().start,
-                format!("{field}.roughness"),
-                "must be > 0 when specular is used",
-            ));
+            return Err(err("roughness", "must be > 0 when specular is used"));
         }
         if d.ior == 0.0 {
-            return Err(src.error(m.span().start, format!("{field}.ior"), "must be > 0"));
+            return Err(err("ior", "must be > 0"));
         }
         material_index.insert(name.clone(), materials.len() as u32);
         materials.push(Material {
@@ -255,7 +245,7 @@ fn build_camera(
     };
     model.and_then(Camera::new).map_err(|e| {
         let field = camera_field(form, &e);
-        src.error(c.span().start, format!("camera.{form}.{field}"), e)
+        src.key_error(c.span(), field, format!("camera.{form}.{field}"), e)
     })
 }
 
@@ -337,11 +327,12 @@ impl Builder<'_> {
         out: &mut Vec<Instance>,
     ) -> Result<(), SceneError> {
         let d = node.get_ref();
-        let at = node.span().start;
+        let span = node.span();
         let err = |field: &str, msg: &dyn std::fmt::Display| {
-            self.src.error(at, format!("{path}.{field}"), msg)
+            self.src
+                .key_error(span.clone(), field, format!("{path}.{field}"), msg)
         };
-        self.check_fields(d, path, at)?;
+        self.check_fields(d, path, span.clone())?;
 
         // Compose the local transform, validating each operation on its own line.
         let mut local = Affine64::IDENTITY;
@@ -509,7 +500,12 @@ impl Builder<'_> {
     }
 
     /// Rejects fields that do not belong to the node's kind.
-    fn check_fields(&self, d: &NodeDesc, path: &str, at: usize) -> Result<(), SceneError> {
+    fn check_fields(
+        &self,
+        d: &NodeDesc,
+        path: &str,
+        span: std::ops::Range<usize>,
+    ) -> Result<(), SceneError> {
         let k = d.kind;
         let wrong = [
             (
@@ -526,8 +522,9 @@ impl Builder<'_> {
         for (field, bad) in wrong {
             if bad {
                 let kind = format!("{k:?}").to_lowercase();
-                return Err(self.src.error(
-                    at,
+                return Err(self.src.key_error(
+                    span,
+                    field,
                     format!("{path}.{field}"),
                     format!("not a field of a {kind}"),
                 ));

@@ -45,6 +45,63 @@ impl<'a> Source<'a> {
         (line, column)
     }
 
+    /// The offset of `key = ...` inside the byte range `within` (a table), or the range's
+    /// start when the key is not written there (a default value is at fault).
+    pub fn key_offset(&self, within: std::ops::Range<usize>, key: &str) -> usize {
+        // A `[table]` header's span covers only the header: its keys run to the next header.
+        let end = within
+            .end
+            .max(self.next_header(within.start))
+            .min(self.text.len());
+        let text = &self.text[within.start.min(end)..end];
+        let bytes = text.as_bytes();
+        let mut from = 0;
+        while let Some(k) = text[from..].find(key) {
+            let at = from + k;
+            let before_ok =
+                at == 0 || !(bytes[at - 1].is_ascii_alphanumeric() || bytes[at - 1] == b'_');
+            let rest = text[at + key.len()..].trim_start();
+            if before_ok && rest.starts_with('=') {
+                return within.start + at;
+            }
+            from = at + key.len();
+        }
+        within.start
+    }
+
+    /// The offset of the first `[table]` or `[[array]]` header line after `from`'s line
+    /// (or the end of the text).
+    fn next_header(&self, from: usize) -> usize {
+        let mut pos = self.text[from.min(self.text.len())..]
+            .find('\n')
+            .map_or(self.text.len(), |k| from + k + 1);
+        while pos < self.text.len() {
+            let line_end = self.text[pos..]
+                .find('\n')
+                .map_or(self.text.len(), |k| pos + k);
+            let line = self.text[pos..line_end].trim_start();
+            let name = line.trim_start_matches('[');
+            if line.starts_with('[')
+                && name.starts_with(|c: char| c.is_alphabetic() || c == '"' || c == '\'')
+            {
+                return pos;
+            }
+            pos = line_end + 1;
+        }
+        self.text.len()
+    }
+
+    /// An error at a key inside a table's span.
+    pub fn key_error(
+        &self,
+        within: std::ops::Range<usize>,
+        key: &str,
+        field: impl Into<String>,
+        message: impl std::fmt::Display,
+    ) -> SceneError {
+        self.error(self.key_offset(within, key), field, message)
+    }
+
     /// An error at a byte offset.
     pub fn error(
         &self,

@@ -325,7 +325,11 @@ pub fn parse(text: &str) -> Result<SceneDesc, (Option<std::ops::Range<usize>>, S
     let de = toml::Deserializer::parse(text)
         .map_err(|e| (e.span(), String::new(), e.message().to_string()))?;
     serde_path_to_error::deserialize(de).map_err(|e| {
-        let path = e.path().to_string();
+        // `Spanned<T>` appears in the path as a private wrapper field; drop it.
+        let path = e
+            .path()
+            .to_string()
+            .replace(".$__serde_spanned_private_value", "");
         let inner = e.into_inner();
         (inner.span(), path, inner.message().to_string())
     })

@@ -1,0 +1,219 @@
+//! Bad input gets a clear error naming the file, the line and column, and the field; it
+//! never panics and never leaves an output file behind.
+
+use renderer::scene::{Scene, SceneError};
+use std::path::Path;
+
+const CAMERA: &str = r#"
+[camera.view]
+vrp = [0, 0, 0]
+vpn = [0, 0, 1]
+vup = [0, 1, 0]
+e = 1
+window = { left = -1, right = 1, bottom = -1, top = 1 }
+
+[render]
+width = 8
+height = 8
+"#;
+
+fn load(text: &str) -> Result<Scene, SceneError> {
+    Scene::from_str(text, Path::new("bad.toml"), Path::new("."))
+}
+
+/// Asserts that `text` fails at `line` with a field path containing `field` and a message
+/// containing `msg`.
+fn check(text: &str, line: usize, field: &str, msg: &str) {
+    let e = load(text).expect_err("the scene must be rejected");
+    assert_eq!(e.file, "bad.toml");
+    assert_eq!(e.line, line, "line of: {e}");
+    assert!(e.column >= 1, "column of: {e}");
+    assert!(
+        e.field.contains(field),
+        "field '{}' should contain '{field}': {e}",
+        e.field
+    );
+    assert!(
+        e.message.contains(msg),
+        "message should contain '{msg}': {e}"
+    );
+    // The rendered message starts with file:line:column.
+    assert!(e
+        .to_string()
+        .starts_with(&format!("bad.toml:{line}:{}", e.column)));
+}
+
+#[test]
+fn test01_syntax_error_has_a_position() {
+    check("[camera.view\nvrp = [0,0,0]\n", 1, "(syntax)", "");
+}
+
+#[test]
+fn test02_unknown_field_is_rejected() {
+    let text = format!("{CAMERA}\n[[objects]]\ntype = \"sphere\"\nradius = 2\n");
+    check(&text, 15, "objects[0].radius", "unknown field `radius`");
+}
+
+#[test]
+fn test03_wrong_type_names_the_field() {
+    let text = CAMERA.replace("width = 8", "width = \"eight\"");
+    check(&text, 10, "render.width", "invalid type");
+}
+
+#[test]
+fn test04_unknown_shape_type() {
+    let text = format!("{CAMERA}\n[[objects]]\ntype = \"torus\"\n");
+    check(&text, 14, "objects[0].type", "unknown variant `torus`");
+}
+
+#[test]
+fn test05_up_parallel_to_vpn() {
+    check(
+        &CAMERA.replace("vup = [0, 1, 0]", "vup = [0, 0, 2]"),
+        5,
+        "camera.view.vup",
+        "parallel",
+    );
+}
+
+#[test]
+fn test06_zero_vectors_and_eye_distance() {
+    check(
+        &CAMERA.replace("vpn = [0, 0, 1]", "vpn = [0, 0, 0]"),
+        4,
+        "camera.view.vpn",
+        "zero-length",
+    );
+    check(
+        &CAMERA.replace("e = 1", "e = 0"),
+        6,
+        "camera.view.e",
+        "E must be > 0",
+    );
+    check(
+        &CAMERA.replace("e = 1", "e = -2"),
+        6,
+        "camera.view.e",
+        "E must be > 0",
+    );
+    check(
+        &CAMERA.replace("right = 1", "right = -1"),
+        7,
+        "camera.view.window",
+        "empty",
+    );
+}
+
+#[test]
+fn test07_singular_transform_names_the_operation() {
+    let text = format!(
+        "{CAMERA}\n[[objects]]\ntype = \"group\"\nchildren = [\n  {{ type = \"sphere\" }},\n  {{ type = \"box\", transform = [{{ translate = [1, 0, 0] }},\n    {{ scale = [1, 0, 1] }}] }},\n]\n"
+    );
+    check(&text, 18, "objects[0].children[1].transform[1]", "singular");
+}
+
+#[test]
+fn test08_non_finite_and_composed_singular_transforms() {
+    // A huge scale is fine alone, but nan is not representable in TOML except as `nan`.
+    let text = format!(
+        "{CAMERA}\n[[objects]]\ntype = \"sphere\"\ntransform = [{{ translate = [nan, 0, 0] }}]\n"
+    );
+    check(&text, 15, "objects[0].transform[0]", "non-finite");
+    let text = format!("{CAMERA}\n[[objects]]\ntype = \"sphere\"\ntransform = [{{ rotate = {{ axis = [0, 0, 0], degrees = 10 }} }}]\n");
+    check(&text, 15, "objects[0].transform[0]", "zero-length");
+}
+
+#[test]
+fn test09_references_must_resolve() {
+    let text = format!("{CAMERA}\n[[objects]]\ntype = \"sphere\"\nmaterial = \"gold\"\n");
+    check(&text, 15, "objects[0].material", "no material named 'gold'");
+    let text = format!("{CAMERA}\n[[objects]]\ntype = \"instance\"\nof = \"tree\"\n");
+    check(&text, 15, "of", "no definition named 'tree'");
+    let text = format!("{CAMERA}\n[defs.a]\ntype = \"instance\"\nof = \"a\"\n\n[[objects]]\ntype = \"instance\"\nof = \"a\"\n");
+    check(&text, 15, "of", "contains itself");
+    let text = format!("{CAMERA}\n[[objects]]\ntype = \"mesh\"\nfile = \"no/such.obj\"\n");
+    check(&text, 15, "objects[0].file", "no/such.obj");
+}
+
+#[test]
+fn test10_fields_must_match_the_kind() {
+    let text = format!("{CAMERA}\n[[objects]]\ntype = \"sphere\"\ncapped = true\n");
+    check(&text, 15, "objects[0].capped", "not a field of a sphere");
+    let text = format!("{CAMERA}\n[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 1, 1], [2, 2, 2]]\n");
+    check(&text, 15, "objects[0].vertices", "degenerate");
+}
+
+#[test]
+fn test11_render_settings_are_validated() {
+    check(
+        &CAMERA.replace("width = 8", "width = 0"),
+        9,
+        "render.width",
+        "at least 1",
+    );
+    let text = format!("{CAMERA}samples = 0\n");
+    check(&text, 9, "render.samples", "at least 1");
+    let text = format!("{CAMERA}\n[materials.m]\nior = -1.5\n");
+    check(&text, 14, "materials.m.ior", "≥ 0");
+}
+
+#[test]
+fn test12_missing_file_is_an_error_not_a_panic() {
+    let e = Scene::load(Path::new("/no/such/scene.toml")).unwrap_err();
+    assert!(e.to_string().contains("/no/such/scene.toml"), "{e}");
+}
+
+/// The command line: a bad scene exits with status 2, prints the located error, and writes
+/// no output file (not even a partial one).
+#[test]
+fn test13_cli_reports_and_writes_nothing() {
+    let dir = std::env::temp_dir().join(format!("renderer-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("bad.toml");
+    std::fs::write(&scene, CAMERA.replace("vup = [0, 1, 0]", "vup = [0, 0, 1]")).unwrap();
+    let out = dir.join("out.png");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_renderer"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("bad.toml:5:1: camera.view.vup"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(
+        std::fs::read_dir(&dir).unwrap().count() == 1,
+        "nothing but the scene may be in {dir:?}"
+    );
+
+    // A good scene to an unwritable place fails cleanly too, leaving no temporary file.
+    std::fs::write(&scene, CAMERA).unwrap();
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_renderer"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            dir.join("missing-dir/out.exr").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    assert!(std::fs::read_dir(&dir).unwrap().count() == 1);
+    // And an unknown extension is refused before rendering.
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_renderer"))
+        .args([
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            dir.join("out.jpg").to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("unknown output format"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
