@@ -113,40 +113,37 @@ impl Instance {
 /// Instances under a BVH, plus the unbounded ones.
 #[derive(Clone, Debug, Default)]
 pub struct Aggregate {
-    /// Every instance, in scene order.
+    /// Every instance: first the bounded ones in BVH leaf order, then the unbounded ones.
     pub instances: Vec<Instance>,
-    bounded: Vec<u32>,
-    unbounded: Vec<u32>,
+    /// Number of bounded instances (the BVH's primitives are `instances[..bounded]`).
+    bounded: usize,
     bvh: Bvh,
 }
 
 impl Aggregate {
-    /// Builds the BVH over the bounded instances.
+    /// Builds the BVH over the bounded instances and stores them in leaf order.
     pub fn new(instances: Vec<Instance>) -> Self {
-        let mut bounded = Vec::new();
-        let mut unbounded = Vec::new();
-        let mut boxes = Vec::new();
-        for (i, inst) in instances.iter().enumerate() {
-            let b = inst.bounds();
-            if b.is_finite() {
-                bounded.push(i as u32);
-                boxes.push(b);
-            } else {
-                unbounded.push(i as u32);
-            }
-        }
-        let bvh = Bvh::build(&boxes);
+        let (bounded, unbounded): (Vec<Instance>, Vec<Instance>) =
+            instances.into_iter().partition(|inst| inst.bounds().is_finite());
+        let boxes: Vec<Aabb> = bounded.iter().map(Instance::bounds).collect();
+        let mut bvh = Bvh::build(&boxes);
+        let mut instances = bvh.reorder(bounded);
+        let bounded = instances.len();
+        instances.extend(unbounded);
         Aggregate {
             instances,
             bounded,
-            unbounded,
             bvh,
         }
     }
 
+    fn unbounded(&self) -> &[Instance] {
+        &self.instances[self.bounded..]
+    }
+
     /// Bounds (infinite when an unbounded instance is present).
     pub fn bounds(&self) -> Aabb {
-        if !self.unbounded.is_empty() {
+        if !self.unbounded().is_empty() {
             return Aabb {
                 min: Vec3::splat(Real::NEG_INFINITY),
                 max: Vec3::splat(Real::INFINITY),
@@ -159,15 +156,15 @@ impl Aggregate {
     pub fn intersect(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut t_max = t_max;
-        for &i in &self.unbounded {
-            if let Some(h) = self.instances[i as usize].intersect(ray, t_min, t_max) {
+        for inst in self.unbounded() {
+            if let Some(h) = inst.intersect(ray, t_min, t_max) {
                 t_max = h.t;
                 best = Some(h);
             }
         }
-        if !self.bounded.is_empty() {
+        if self.bounded > 0 {
             self.bvh.traverse(ray, t_min, t_max, false, |k, tmax| {
-                let inst = &self.instances[self.bounded[k as usize] as usize];
+                let inst = &self.instances[k as usize];
                 match inst.intersect(ray, t_min, tmax) {
                     Some(h) => {
                         best = Some(h);
@@ -182,16 +179,12 @@ impl Aggregate {
 
     /// Whether anything is hit with `t_min < t < t_max`.
     pub fn occluded(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
-        if self
-            .unbounded
-            .iter()
-            .any(|&i| self.instances[i as usize].occluded(ray, t_min, t_max))
-        {
+        if self.unbounded().iter().any(|inst| inst.occluded(ray, t_min, t_max)) {
             return true;
         }
-        !self.bounded.is_empty()
+        self.bounded > 0
             && self.bvh.traverse(ray, t_min, t_max, true, |k, tmax| {
-                if self.instances[self.bounded[k as usize] as usize].occluded(ray, t_min, tmax) {
+                if self.instances[k as usize].occluded(ray, t_min, tmax) {
                     Visit::Hit(tmax)
                 } else {
                     Visit::Miss

@@ -127,6 +127,23 @@ impl Bvh {
         bvh
     }
 
+    /// Permutes `items` (one per box given to [`Bvh::build`]) into leaf order and makes the
+    /// index array the identity, so that a leaf's primitives sit side by side in memory
+    /// and traversal reads them without an indirection into scattered storage.
+    pub fn reorder<T>(&mut self, items: Vec<T>) -> Vec<T> {
+        assert_eq!(items.len(), self.indices.len(), "one item per box");
+        let mut slots: Vec<Option<T>> = items.into_iter().map(Some).collect();
+        let ordered = self
+            .indices
+            .iter()
+            .map(|&i| slots[i as usize].take().expect("the BVH references each primitive once"))
+            .collect();
+        for (k, i) in self.indices.iter_mut().enumerate() {
+            *i = k as u32;
+        }
+        ordered
+    }
+
     /// Bounds of everything.
     pub fn bounds(&self) -> Aabb {
         self.nodes[0].bounds

@@ -28,7 +28,12 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
             roots[0] = -c / (2.0 * b);
         }
     } else {
-        let disc = b * b - a * c;
+        // b² − a·c cancels catastrophically when the roots are close relative to the
+        // origin's distance (a ray passing near the apex from afar). As for the sphere,
+        // use b² − a·c = −a·Q(l) with l = o − d·(b/a) and Q(v) = x² + z² − k²·w².
+        let s = b / a;
+        let (lx, lw, lz) = (o.x - d.x * s, ow - dw * s, o.z - d.z * s);
+        let disc = -a * (lx * lx + lz * lz - K2 * lw * lw);
         if disc >= 0.0 {
             let s = disc.sqrt();
             let q = -(b + s.copysign(b));
@@ -46,6 +51,17 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
         if t > t_min && t < t_max {
             let (t, p) = refine(ray, t);
             if (-1.0..=1.0).contains(&p.y) && t > t_min && t < t_max {
+                // Re-project radially onto r = ½(1 − y), as the cylinder does: near a
+                // double root (or far from the cone) one Newton step can leave p off the
+                // surface by much more than `err`; the re-projected point is on it up to
+                // the rounding of these few operations, well within γ(8).
+                let r = (p.x * p.x + p.z * p.z).sqrt();
+                let p = if r > 0.0 {
+                    let s = 0.5 * (1.0 - p.y) / r;
+                    Vec3::new(p.x * s, p.y, p.z * s)
+                } else {
+                    p
+                };
                 let mut n = Vec3::new(p.x, K2 * (1.0 - p.y), p.z);
                 if n == Vec3::ZERO {
                     n = Vec3::Y;

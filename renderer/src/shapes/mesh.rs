@@ -17,7 +17,7 @@ pub struct Mesh {
     pub normals: Option<Vec<Vec3>>,
     /// Per-vertex uvs, if the file has them.
     pub uvs: Option<Vec<Vec2>>,
-    /// Triangles as vertex indices.
+    /// Triangles as vertex indices, in BVH leaf order (not file order).
     pub triangles: Vec<[u32; 3]>,
     bvh: Bvh,
 }
@@ -73,7 +73,8 @@ impl Mesh {
                 b
             })
             .collect();
-        let bvh = Bvh::build(&boxes);
+        let mut bvh = Bvh::build(&boxes);
+        let triangles = bvh.reorder(triangles);
         Ok(Mesh {
             positions,
             normals,
