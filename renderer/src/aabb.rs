@@ -99,10 +99,13 @@ impl Aabb {
     pub fn hit(&self, o: Vec3, inv_d: Vec3, t_min: Real, t_max: Real) -> Option<Real> {
         let t0 = (self.min - o) * inv_d;
         let t1 = (self.max - o) * inv_d;
-        // `min`/`max` here must ignore NaN (0·inf when the origin lies on a slab plane and
-        // the direction is parallel to it); glam's min/max follow f32::min, which does.
-        let tn = t0.min(t1);
-        let tf = t0.max(t1);
+        // 0·inf = NaN when the origin lies on a slab plane and the direction is parallel to
+        // it: the ray is then inside the closed slab, which must not constrain it. glam's
+        // min/max (`if a < b { a } else { b }`) do not ignore NaN, and even f32::min would
+        // turn (NaN, +inf) into +inf, so the NaN slabs are replaced explicitly.
+        let nan = t0.is_nan_mask() | t1.is_nan_mask();
+        let tn = Vec3::select(nan, Vec3::NEG_INFINITY, t0.min(t1));
+        let tf = Vec3::select(nan, Vec3::INFINITY, t0.max(t1));
         let near = tn.x.max(tn.y).max(tn.z).max(t_min);
         let far = tf.x.min(tf.y).min(tf.z).min(t_max) * (1.0 + 2.0 * gamma(3));
         if near <= far {

@@ -123,8 +123,9 @@ pub struct Aggregate {
 impl Aggregate {
     /// Builds the BVH over the bounded instances and stores them in leaf order.
     pub fn new(instances: Vec<Instance>) -> Self {
-        let (bounded, unbounded): (Vec<Instance>, Vec<Instance>) =
-            instances.into_iter().partition(|inst| inst.bounds().is_finite());
+        let (bounded, unbounded): (Vec<Instance>, Vec<Instance>) = instances
+            .into_iter()
+            .partition(|inst| inst.bounds().is_finite());
         let boxes: Vec<Aabb> = bounded.iter().map(Instance::bounds).collect();
         let mut bvh = Bvh::build(&boxes);
         let mut instances = bvh.reorder(bounded);
@@ -179,7 +180,11 @@ impl Aggregate {
 
     /// Whether anything is hit with `t_min < t < t_max`.
     pub fn occluded(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
-        if self.unbounded().iter().any(|inst| inst.occluded(ray, t_min, t_max)) {
+        if self
+            .unbounded()
+            .iter()
+            .any(|inst| inst.occluded(ray, t_min, t_max))
+        {
             return true;
         }
         self.bounded > 0

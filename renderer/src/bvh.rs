@@ -136,7 +136,11 @@ impl Bvh {
         let ordered = self
             .indices
             .iter()
-            .map(|&i| slots[i as usize].take().expect("the BVH references each primitive once"))
+            .map(|&i| {
+                slots[i as usize]
+                    .take()
+                    .expect("the BVH references each primitive once")
+            })
             .collect();
         for (k, i) in self.indices.iter_mut().enumerate() {
             *i = k as u32;

@@ -184,10 +184,17 @@ fn test05_srgb_mapping() {
 
 #[test]
 fn test06_documented_example_builds() {
-    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/scene-format.md")).unwrap();
+    let doc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/scene-format.md"))
+            .unwrap();
     let start = doc.find("```toml\n").expect("the doc has a TOML example") + 8;
     let end = start + doc[start..].find("```").unwrap();
-    let scene = Scene::from_str(&doc[start..end], Path::new("scene-format.md"), Path::new(".")).unwrap_or_else(|e| panic!("{e}"));
+    let scene = Scene::from_str(
+        &doc[start..end],
+        Path::new("scene-format.md"),
+        Path::new("."),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(scene.objects.len(), 2);
     let img = render(&scene, &opts(2));
     assert!(img.aov.unwrap().object_id.iter().any(|&v| v == 2.0));

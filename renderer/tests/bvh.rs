@@ -1,0 +1,479 @@
+//! The BVH against brute force: random scenes of transformed primitives (the instance-level
+//! BVH of `Aggregate`), axis-aligned rays lying in box planes, and a large mesh (the
+//! per-mesh BVH) against testing every triangle on its own.
+
+use glam::{DMat3, DQuat, DVec3};
+use renderer::real::{dvec3, vec3};
+use renderer::shapes::{Mesh, Shape, Triangle};
+use renderer::{Affine64, Aggregate, Hit, Instance, Ray, Real, Transform, Vec3};
+use std::sync::Arc;
+
+const INF: Real = Real::INFINITY;
+
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn f(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.f()
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+    fn chance(&mut self, p: f64) -> bool {
+        self.f() < p
+    }
+    fn vec(&mut self, a: f64, b: f64) -> DVec3 {
+        DVec3::new(self.range(a, b), self.range(a, b), self.range(a, b))
+    }
+    fn unit(&mut self) -> DVec3 {
+        loop {
+            let v = self.vec(-1.0, 1.0);
+            let l = v.length_squared();
+            if l > 1e-4 && l <= 1.0 {
+                return v / l.sqrt();
+            }
+        }
+    }
+}
+
+/// A random affine map: rotation, non-uniform scale, sometimes a shear, translation.
+fn random_affine(rng: &mut SplitMix, extent: f64, size: f64) -> Affine64 {
+    let q = loop {
+        let v = glam::DVec4::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+        if v.length_squared() > 1e-3 {
+            break DQuat::from_vec4(v.normalize());
+        }
+    };
+    let scale = DVec3::new(
+        rng.range(0.05, 1.0),
+        rng.range(0.05, 1.0),
+        rng.range(0.05, 1.0),
+    ) * size;
+    let mut m = DMat3::from_quat(q) * DMat3::from_diagonal(scale);
+    if rng.chance(0.3) {
+        let shear = DMat3::from_cols(
+            DVec3::X,
+            DVec3::new(rng.range(-0.6, 0.6), 1.0, 0.0),
+            DVec3::new(rng.range(-0.6, 0.6), rng.range(-0.6, 0.6), 1.0),
+        );
+        m = shear * m;
+    }
+    Affine64 {
+        m,
+        d: rng.vec(-extent, extent),
+    }
+}
+
+/// A UV sphere of radius ~1 with a deterministic bumpy (non-convex) radius, outward winding,
+/// shared vertices (so it is closed).
+fn bumpy_sphere(n_lat: usize, n_lon: usize, seed: u64) -> Mesh {
+    let mut rng = SplitMix(seed);
+    let mut pos = vec![Vec3::new(0.0, 1.0, 0.0)];
+    for i in 1..n_lat {
+        let theta = std::f64::consts::PI * i as f64 / n_lat as f64;
+        for j in 0..n_lon {
+            let phi = 2.0 * std::f64::consts::PI * j as f64 / n_lon as f64;
+            let r = 1.0 + 0.15 * (5.0 * theta).sin() * (3.0 * phi).cos() + rng.range(-0.02, 0.02);
+            let p = DVec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            ) * r;
+            pos.push(vec3(p));
+        }
+    }
+    pos.push(Vec3::new(0.0, -1.0, 0.0));
+    let south = (pos.len() - 1) as u32;
+    let ring = |i: usize, j: usize| (1 + (i - 1) * n_lon + j % n_lon) as u32;
+    let mut tris = Vec::new();
+    for j in 0..n_lon {
+        tris.push([0, ring(1, j + 1), ring(1, j)]);
+        tris.push([south, ring(n_lat - 1, j), ring(n_lat - 1, j + 1)]);
+    }
+    for i in 1..n_lat - 1 {
+        for j in 0..n_lon {
+            let (a, b, c, d) = (
+                ring(i, j),
+                ring(i, j + 1),
+                ring(i + 1, j),
+                ring(i + 1, j + 1),
+            );
+            tris.push([a, b, d]);
+            tris.push([a, d, c]);
+        }
+    }
+    Mesh::new(pos, None, None, tris).expect("valid mesh")
+}
+
+fn random_shape(rng: &mut SplitMix, mesh: &Arc<Mesh>, group: &Arc<Aggregate>) -> Shape {
+    match rng.below(11) {
+        0 => Shape::Sphere,
+        1 => Shape::Cube,
+        2 => Shape::Cylinder { capped: true },
+        3 => Shape::Cylinder { capped: false },
+        4 => Shape::Cone { capped: true },
+        5 => Shape::Cone { capped: false },
+        6 => Shape::Disk,
+        7 => Shape::Rectangle,
+        8 => Shape::Mesh(mesh.clone()),
+        9 => Shape::Group(group.clone()),
+        _ => Shape::Triangle(Box::new(Triangle {
+            p: [0, 1, 2].map(|_| vec3(rng.vec(-1.0, 1.0))),
+            n: None,
+            uv: None,
+        })),
+    }
+}
+
+/// A scene of `n` bounded instances (object ids 1..=n), plus sometimes a plane.
+fn random_scene(rng: &mut SplitMix, n: usize, with_plane: bool) -> (Aggregate, f64) {
+    let mesh = Arc::new(bumpy_sphere(8, 12, 3));
+    let group = Arc::new(Aggregate::new(
+        (0..3)
+            .map(|k| Instance {
+                shape: [Shape::Sphere, Shape::Cube, Shape::Cone { capped: true }][k].clone(),
+                xf: Some(Transform::new(&random_affine(rng, 1.0, 0.6)).unwrap()),
+                material: 0,
+                // 0: inherit the id of the instance that places the group.
+                object_id: 0,
+            })
+            .collect(),
+    ));
+    // Keep the density roughly constant.
+    let extent = 2.0 + 2.0 * (n as f64).cbrt();
+    let mut instances: Vec<Instance> = (0..n)
+        .map(|i| {
+            let shape = random_shape(rng, &mesh, &group);
+            let xf = if rng.chance(0.05) {
+                None
+            } else {
+                Some(Transform::new(&random_affine(rng, extent, 1.0)).unwrap())
+            };
+            Instance {
+                shape,
+                xf,
+                material: 0,
+                object_id: i as u32 + 1,
+            }
+        })
+        .collect();
+    if with_plane {
+        // Inserted somewhere in the middle so scene order is not special.
+        let at = rng.below(instances.len() + 1);
+        let a = Affine64 {
+            m: DMat3::from_quat(DQuat::from_axis_angle(rng.unit(), rng.range(0.0, 0.5))),
+            d: DVec3::new(0.0, -extent, 0.0),
+        };
+        instances.insert(
+            at,
+            Instance {
+                shape: Shape::Plane,
+                xf: Some(Transform::new(&a).unwrap()),
+                material: 0,
+                object_id: 1_000_000,
+            },
+        );
+    }
+    (Aggregate::new(instances), extent)
+}
+
+/// A random ray and interval. Some directions have exactly zero components (of either
+/// sign), and some origins lie exactly in a plane of an instance's bounding box.
+fn random_ray(rng: &mut SplitMix, agg: &Aggregate, extent: f64) -> (Ray, Real, Real) {
+    let o = rng.vec(-1.5 * extent, 1.5 * extent);
+    let mut d = if rng.chance(0.7) {
+        // Towards a random instance.
+        let inst = &agg.instances[rng.below(agg.instances.len())];
+        let b = inst.bounds();
+        let c = if b.is_finite() {
+            dvec3(b.centroid()) + rng.vec(-0.5, 0.5)
+        } else {
+            rng.vec(-extent, extent)
+        };
+        (c - o).normalize_or(DVec3::X)
+    } else {
+        rng.unit()
+    } * 10f64.powf(rng.range(-2.0, 2.0));
+    let mut o = vec3(o);
+    let zeros = match rng.below(10) {
+        0 | 1 => 1,
+        2 => 2,
+        _ => 0,
+    };
+    for _ in 0..zeros {
+        let k = rng.below(3);
+        d[k] = if rng.chance(0.5) { 0.0 } else { -0.0 };
+        // Put the origin in a bounding plane of some instance.
+        if rng.chance(0.5) {
+            let b = agg.instances[rng.below(agg.instances.len())].bounds();
+            if b.is_finite() {
+                o[k] = if rng.chance(0.5) { b.min[k] } else { b.max[k] };
+            }
+        }
+    }
+    if d == DVec3::ZERO {
+        d = DVec3::X;
+    }
+    let t_min = if rng.chance(0.3) {
+        rng.range(0.0, 1.0) as Real
+    } else {
+        0.0
+    };
+    let t_max = if rng.chance(0.3) {
+        (t_min as f64 + rng.range(0.0, 3.0 * extent / d.length())) as Real
+    } else {
+        INF
+    };
+    (Ray::new(o, vec3(d)), t_min, t_max)
+}
+
+/// BVH and brute force agree on the first hit and on occlusion.
+#[track_caller]
+fn agree(agg: &Aggregate, r: &Ray, t_min: Real, t_max: Real, what: &str) -> bool {
+    let bf = agg.intersect_brute_force(r, t_min, t_max);
+    let bv = agg.intersect(r, t_min, t_max);
+    match (bv, bf) {
+        (None, None) => {}
+        (Some(a), Some(b)) => {
+            let rel = ((a.t - b.t) as f64).abs() / (b.t as f64).max(Real::MIN_POSITIVE as f64);
+            assert!(
+                a.object_id == b.object_id || a.t == b.t,
+                "BVH hit object {} at t = {}, brute force object {} at t = {}: {what} {r:?} [{t_min}, {t_max}]",
+                a.object_id,
+                a.t,
+                b.object_id,
+                b.t
+            );
+            assert!(rel <= 1e-6, "t {} vs {}: {what} {r:?}", a.t, b.t);
+            assert!(
+                a.t > t_min && a.t < t_max,
+                "t = {} outside the interval",
+                a.t
+            );
+        }
+        (a, b) => panic!(
+            "BVH {:?}, brute force {:?}: {what} ray {r:?} interval [{t_min}, {t_max}]",
+            a.map(|h| (h.object_id, h.t)),
+            b.map(|h| (h.object_id, h.t))
+        ),
+    }
+    assert_eq!(
+        agg.occluded(r, t_min, t_max),
+        bf.is_some(),
+        "occluded disagrees with brute force ({:?}): {what} ray {r:?} interval [{t_min}, {t_max}]",
+        bf.map(|h| (h.object_id, h.t))
+    );
+    bf.is_some()
+}
+
+#[test]
+fn random_scenes_match_brute_force() {
+    let mut rng = SplitMix(2024);
+    for (k, &n) in [1usize, 2, 3, 5, 17, 100, 500, 2000].iter().enumerate() {
+        for with_plane in [false, true] {
+            let (agg, extent) = random_scene(&mut rng, n, with_plane);
+            let rays = if n >= 500 { 3000 } else { 5000 };
+            let mut hits = 0;
+            for i in 0..rays {
+                let (r, t_min, t_max) = random_ray(&mut rng, &agg, extent);
+                let what = format!("scene {k} (n = {n}, plane: {with_plane}), ray {i}");
+                hits += agree(&agg, &r, t_min, t_max, &what) as usize;
+            }
+            // Enough rays hit something for the comparison to mean anything.
+            assert!(hits * 50 > rays, "n = {n}: only {hits} of {rays} rays hit");
+        }
+    }
+}
+
+/// Axis-aligned boxes, cylinders and cones with exactly representable bounds, and rays that
+/// lie exactly in a plane of those bounds (direction components ±0): the boundary of a box
+/// belongs to it, so the BVH must not cull what brute force hits there.
+#[test]
+fn rays_in_bounding_planes() {
+    let mut instances = Vec::new();
+    let shapes = [
+        Shape::Cube,
+        Shape::Cylinder { capped: true },
+        Shape::Cone { capped: true },
+        Shape::Cube,
+    ];
+    for i in 0..3 {
+        for j in 0..3 {
+            for k in 0..3 {
+                let c = DVec3::new(4.0 * i as f64, 4.0 * j as f64, 4.0 * k as f64);
+                let id = instances.len() as u32 + 1;
+                instances.push(Instance {
+                    shape: shapes[(i + j + k) % 4].clone(),
+                    xf: (c != DVec3::ZERO)
+                        .then(|| Transform::new(&Affine64::translate(c)).unwrap()),
+                    material: 0,
+                    object_id: id,
+                });
+            }
+        }
+    }
+    let agg = Aggregate::new(instances);
+    let mut rng = SplitMix(77);
+    let mut hits = 0;
+    let mut count = 0;
+    for inst in &agg.instances {
+        let b = inst.bounds();
+        for plane_axis in 0..3 {
+            for side in [b.min, b.max] {
+                for move_axis in (0..3).filter(|&a| a != plane_axis) {
+                    for sign in [1.0 as Real, -1.0] {
+                        for zero in [0.0 as Real, -0.0] {
+                            let third = 3 - plane_axis - move_axis;
+                            let mut o = Vec3::ZERO;
+                            o[plane_axis] = side[plane_axis];
+                            o[move_axis] = b.centroid()[move_axis] - sign * 5.0;
+                            // Across the face, including its edges.
+                            o[third] = match rng.below(4) {
+                                0 => b.min[third],
+                                1 => b.max[third],
+                                _ => b.min[third] + (b.max[third] - b.min[third]) * rng.f() as Real,
+                            };
+                            let mut d = Vec3::splat(zero);
+                            d[move_axis] = sign;
+                            let r = Ray::new(o, d);
+                            let what = format!("in the plane {plane_axis} of {:?}", b);
+                            hits += agree(&agg, &r, 0.0, INF, &what) as usize;
+                            count += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(hits * 2 > count, "only {hits} of {count} rays hit");
+}
+
+/// Closest hit over every triangle, each tested on its own.
+fn brute_force_triangles(tris: &[Triangle], r: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+    let mut best = None;
+    let mut t_max = t_max;
+    for t in tris {
+        if let Some(h) = t.intersect(r, t_min, t_max) {
+            t_max = h.t;
+            best = Some(h);
+        }
+    }
+    best
+}
+
+#[test]
+fn mesh_bvh_matches_brute_force() {
+    let mesh = bumpy_sphere(48, 64, 11);
+    assert!(mesh.triangles.len() > 5000);
+    let tris: Vec<Triangle> = (0..mesh.triangles.len())
+        .map(|i| Triangle {
+            p: mesh.vertices(i),
+            n: None,
+            uv: None,
+        })
+        .collect();
+    let mut rng = SplitMix(5);
+    let check = |r: &Ray, t_min: Real, t_max: Real, what: &str| -> Option<Hit> {
+        let bf = brute_force_triangles(&tris, r, t_min, t_max);
+        let bv = mesh.intersect(r, t_min, t_max);
+        match (bv, bf) {
+            (None, None) => {}
+            (Some(a), Some(b)) => {
+                let rel = ((a.t - b.t) as f64).abs() / b.t as f64;
+                assert!(rel <= 1e-6, "t {} vs {}: {what} {r:?}", a.t, b.t);
+                let scale = 1.0 + dvec3(b.p).length();
+                assert!(
+                    (dvec3(a.p) - dvec3(b.p)).length() <= 1e-5 * scale,
+                    "p {:?} vs {:?}: {what}",
+                    a.p,
+                    b.p
+                );
+            }
+            (a, b) => panic!(
+                "mesh {:?}, brute force {:?}: {what} {r:?} [{t_min}, {t_max}]",
+                a.map(|h| h.t),
+                b.map(|h| h.t)
+            ),
+        }
+        assert_eq!(
+            mesh.occluded(r, t_min, t_max),
+            bf.is_some(),
+            "occluded: {what} {r:?} [{t_min}, {t_max}]"
+        );
+        bf
+    };
+    // Random rays from around the mesh, random intervals.
+    let mut hits = 0;
+    for i in 0..20_000 {
+        let o = rng.unit() * rng.range(0.0, 4.0);
+        let d = (rng.vec(-1.2, 1.2) - o).normalize_or(DVec3::Y) * rng.range(0.1, 10.0);
+        let t_min = if i % 4 == 0 { rng.range(0.0, 0.5) } else { 0.0 } as Real;
+        let t_max = if i % 5 == 0 {
+            rng.range(0.1, 3.0) as Real
+        } else {
+            INF
+        };
+        let r = Ray::new(vec3(o), vec3(d));
+        hits += check(&r, t_min, t_max, &format!("random ray {i}")).is_some() as usize;
+    }
+    assert!(hits > 10_000, "only {hits} hits");
+    // The mesh is star-shaped about the origin: every triangle faces away from it, so each
+    // ray from the origin crosses the surface exactly once.
+    for i in 0..mesh.triangles.len() {
+        let [a, b, c] = mesh.vertices(i).map(dvec3);
+        assert!(
+            (b - a).cross(c - a).dot(a + b + c) > 0.0,
+            "triangle {i} faces inward"
+        );
+    }
+    // Watertight: from the centre towards every vertex and every edge midpoint, a ray
+    // always hits; along the same line from outside, it hits at the vertex.
+    for (i, &v) in mesh.positions.iter().enumerate() {
+        let r = Ray::new(Vec3::ZERO, v);
+        let h = check(&r, 0.0, INF, &format!("towards vertex {i}"));
+        let h = h.unwrap_or_else(|| panic!("a ray from inside through vertex {i} escaped"));
+        assert!(
+            (h.t - 1.0).abs() <= 1e-5,
+            "hit at t = {}, vertex {i} at t = 1",
+            h.t
+        );
+        let s = rng.range(1.5, 4.0);
+        let r = Ray::new(vec3(dvec3(v) * s), vec3(dvec3(v) * -(s - 1.0)));
+        let h = check(&r, 0.0, INF, &format!("from outside to vertex {i}"));
+        let h = h.unwrap_or_else(|| panic!("a ray from outside through vertex {i} missed"));
+        assert!(
+            (h.t - 1.0).abs() <= 1e-5,
+            "hit at t = {}, vertex {i} at t = 1",
+            h.t
+        );
+    }
+    for (i, t) in mesh.triangles.iter().enumerate() {
+        for e in 0..3 {
+            let (a, b) = (
+                mesh.positions[t[e] as usize],
+                mesh.positions[t[(e + 1) % 3] as usize],
+            );
+            let r = Ray::new(Vec3::ZERO, (a + b) * 0.5);
+            let h = check(&r, 0.0, INF, &format!("towards edge {e} of triangle {i}"));
+            assert!(
+                h.is_some(),
+                "a ray from inside through edge {e} of triangle {i} escaped"
+            );
+        }
+    }
+}
