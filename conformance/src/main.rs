@@ -1,8 +1,11 @@
-//! `conformance`: export catalog scenes to the reference renderers' formats, and compare the
-//! renderer with the committed references.
+//! `conformance`: run the catalog against the committed references, export scenes to the
+//! reference renderers' formats, and regenerate references.
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use conformance::catalog::{repo_root, scenes};
+use conformance::harness::{check_povray, Verdict};
+use conformance::manifest::Manifest;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -15,6 +18,13 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Cmd {
+    /// Render catalog scenes, compare them with their references, print a table and write
+    /// target/conformance/index.html. Exits 1 unless every scene passes.
+    Run {
+        /// Only scenes whose name contains this.
+        #[arg(default_value = "")]
+        filter: String,
+    },
     /// Export a scene file to POV-Ray SDL.
     ExportPov {
         /// The scene file.
@@ -22,6 +32,16 @@ enum Cmd {
         /// Output .pov file.
         #[arg(short, long)]
         output: PathBuf,
+    },
+    /// Regenerate POV-Ray references (needs povray; see scripts/regen-povray.sh).
+    RegenPovray {
+        /// Only scenes whose name contains this.
+        #[arg(default_value = "")]
+        filter: String,
+        /// Render into a temporary folder and check that the result equals the committed
+        /// references bit for bit, instead of replacing them.
+        #[arg(long)]
+        check: bool,
     },
 }
 
@@ -37,12 +57,51 @@ fn main() -> ExitCode {
 
 fn run() -> Result<ExitCode> {
     match Cli::parse().cmd {
+        Cmd::Run { filter } => {
+            let root = repo_root();
+            let manifest = Manifest::load(&root.join("references/manifest.toml"))?;
+            let mut outcomes = Vec::new();
+            for e in scenes("povray", &filter)? {
+                outcomes.push(check_povray(&e, &manifest).with_context(|| e.name.clone())?);
+            }
+            print!("{}", conformance::report::table(&outcomes));
+            let dir = root.join("target/conformance");
+            conformance::report::write(&dir, &outcomes)?;
+            println!("report: {}", dir.join("index.html").display());
+            let ok = outcomes.iter().all(|o| o.verdict == Verdict::Pass);
+            Ok(if ok {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(1)
+            })
+        }
         Cmd::ExportPov { scene, output } => {
             let s = renderer::scene::Scene::load(&scene)?;
-            let title = scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+            let title = scene
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
             let sdl = conformance::povray::export(&s, &title);
-            std::fs::write(&output, sdl).with_context(|| format!("writing {}", output.display()))?;
+            std::fs::write(&output, sdl)
+                .with_context(|| format!("writing {}", output.display()))?;
             Ok(ExitCode::SUCCESS)
+        }
+        Cmd::RegenPovray { filter, check } => {
+            let entries = scenes("povray", &filter)?;
+            anyhow::ensure!(!entries.is_empty(), "no catalog scene matches '{filter}'");
+            if check {
+                let bad = conformance::refgen::check(&entries)?;
+                if bad.is_empty() {
+                    println!("{} reference(s) regenerated from scratch and identical to the committed files", entries.len());
+                    Ok(ExitCode::SUCCESS)
+                } else {
+                    println!("regenerated references differ: {}", bad.join(", "));
+                    Ok(ExitCode::from(1))
+                }
+            } else {
+                conformance::refgen::regenerate(&entries)?;
+                Ok(ExitCode::SUCCESS)
+            }
         }
     }
 }

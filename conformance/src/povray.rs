@@ -67,7 +67,11 @@ fn matrix(t: &Transform) -> String {
 }
 
 fn texture_name(m: &Material, index: u32) -> String {
-    let clean: String = m.name.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
+    let clean: String = m
+        .name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
     format!("M{index}_{clean}")
 }
 
@@ -96,7 +100,11 @@ impl Exporter<'_> {
     fn header(&mut self, title: &str) {
         let s = &self.scene.settings;
         let o = &mut self.out;
-        writeln!(o, "// {title}: exported by the verified-tracer conformance harness.").unwrap();
+        writeln!(
+            o,
+            "// {title}: exported by the verified-tracer conformance harness."
+        )
+        .unwrap();
         writeln!(o, "#version 3.7;").unwrap();
         writeln!(
             o,
@@ -123,7 +131,13 @@ impl Exporter<'_> {
         )
         .unwrap();
         for l in &self.scene.lights {
-            write!(o, "light_source {{ {} color rgb {}", vec(l.position), rgb(l.color)).unwrap();
+            write!(
+                o,
+                "light_source {{ {} color rgb {}",
+                vec(l.position),
+                rgb(l.color)
+            )
+            .unwrap();
             if let Some((d, p)) = l.fade {
                 write!(o, " fade_distance {} fade_power {}", num(d), num(p)).unwrap();
             }
@@ -171,10 +185,20 @@ impl Exporter<'_> {
         if let Some(t) = &inst.xf {
             write!(mods, " {}", matrix(t)).unwrap();
         }
-        let material = if inst.material == INHERIT && top { 0 } else { inst.material };
+        let material = if inst.material == INHERIT && top {
+            0
+        } else {
+            inst.material
+        };
         if material != INHERIT {
             let m = self.scene.material(material);
-            write!(mods, " texture {{ {} }} interior {{ ior {} }}", texture_name(m, material), f(m.ior)).unwrap();
+            write!(
+                mods,
+                " texture {{ {} }} interior {{ ior {} }}",
+                texture_name(m, material),
+                f(m.ior)
+            )
+            .unwrap();
         }
         format!("object {{ {shape}{mods} }}")
     }
@@ -184,10 +208,18 @@ impl Exporter<'_> {
             Shape::Sphere => "sphere { <0, 0, 0>, 1 }".into(),
             Shape::Plane => "plane { y, 0 }".into(),
             Shape::Cube => "box { <-1, -1, -1>, <1, 1, 1> }".into(),
-            Shape::Cylinder { capped } => format!("cylinder {{ <0, -1, 0>, <0, 1, 0>, 1{} }}", if *capped { "" } else { " open" }),
-            Shape::Cone { capped } => format!("cone {{ <0, -1, 0>, 1, <0, 1, 0>, 0{} }}", if *capped { "" } else { " open" }),
+            Shape::Cylinder { capped } => format!(
+                "cylinder {{ <0, -1, 0>, <0, 1, 0>, 1{} }}",
+                if *capped { "" } else { " open" }
+            ),
+            Shape::Cone { capped } => format!(
+                "cone {{ <0, -1, 0>, 1, <0, 1, 0>, 0{} }}",
+                if *capped { "" } else { " open" }
+            ),
             Shape::Disk => "disc { <0, 0, 0>, y, 1 }".into(),
-            Shape::Rectangle => "polygon { 5, <-1, 0, -1>, <1, 0, -1>, <1, 0, 1>, <-1, 0, 1>, <-1, 0, -1> }".into(),
+            Shape::Rectangle => {
+                "polygon { 5, <-1, 0, -1>, <1, 0, -1>, <1, 0, 1>, <-1, 0, 1>, <-1, 0, -1> }".into()
+            }
             Shape::Triangle(t) => match &t.n {
                 Some(n) => format!(
                     "smooth_triangle {{ {}, {}, {}, {}, {}, {} }}",
@@ -198,7 +230,12 @@ impl Exporter<'_> {
                     vec(t.p[2]),
                     vec(n[2])
                 ),
-                None => format!("triangle {{ {}, {}, {} }}", vec(t.p[0]), vec(t.p[1]), vec(t.p[2])),
+                None => format!(
+                    "triangle {{ {}, {}, {} }}",
+                    vec(t.p[0]),
+                    vec(t.p[1]),
+                    vec(t.p[2])
+                ),
             },
             Shape::Mesh(m) => {
                 let key = std::sync::Arc::as_ptr(m) as usize;
@@ -206,7 +243,10 @@ impl Exporter<'_> {
                     return name.clone();
                 }
                 let name = format!("Mesh{}", self.meshes.len());
-                let mut d = format!("#declare {name} = mesh2 {{\n  vertex_vectors {{ {}", m.positions.len());
+                let mut d = format!(
+                    "#declare {name} = mesh2 {{\n  vertex_vectors {{ {}",
+                    m.positions.len()
+                );
                 for p in &m.positions {
                     write!(d, ", {}", vec(*p)).unwrap();
                 }
@@ -234,7 +274,11 @@ impl Exporter<'_> {
                 }
                 let name = format!("Def{}", self.defs.len());
                 let body = self.aggregate_body(g, false);
-                let wrapper = if g.instances.len() > 1 { "union" } else { "object" };
+                let wrapper = if g.instances.len() > 1 {
+                    "union"
+                } else {
+                    "object"
+                };
                 let d = format!("#declare {name} = {wrapper} {{\n{body}}}\n");
                 self.out.push_str(&d);
                 self.defs.insert(key, name.clone());

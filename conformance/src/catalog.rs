@@ -1,0 +1,43 @@
+//! The scene catalog: data files in `conformance/scenes/<reference>/*.toml`, one feature
+//! each. The catalog for POV-Ray is written by `scripts/gen_catalog.py`.
+
+use std::path::{Path, PathBuf};
+
+/// The repository root (the workspace holding this crate).
+pub fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("conformance/ has a parent")
+        .to_path_buf()
+}
+
+/// A catalog entry.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Entry {
+    /// Scene name (the file stem).
+    pub name: String,
+    /// Path of the scene file.
+    pub path: PathBuf,
+}
+
+/// The scenes checked against `reference` (e.g. "povray") whose name contains `filter`,
+/// sorted by name.
+pub fn scenes(reference: &str, filter: &str) -> std::io::Result<Vec<Entry>> {
+    let dir = repo_root().join("conformance/scenes").join(reference);
+    let mut v = Vec::new();
+    for e in std::fs::read_dir(&dir)? {
+        let path = e?.path();
+        if path.extension().is_some_and(|x| x == "toml") {
+            let name = path
+                .file_stem()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .into_owned();
+            if name.contains(filter) {
+                v.push(Entry { name, path });
+            }
+        }
+    }
+    v.sort_by(|a, b| a.name.cmp(&b.name));
+    Ok(v)
+}
