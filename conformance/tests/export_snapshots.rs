@@ -1,0 +1,46 @@
+//! Snapshots of the exported POV-Ray SDL for a few scenes: camera vectors, matrices,
+//! textures and interiors, declared definitions and meshes. A change to the exporter shows
+//! up here as a reviewable diff (and makes every reference stale through its export hash).
+
+use conformance::catalog::scenes;
+use conformance::harness::load;
+
+fn sdl(name: &str) -> String {
+    let e = scenes("povray", name).unwrap().into_iter().find(|e| e.name == name).unwrap();
+    let (scene, _) = load(&e).unwrap();
+    conformance::povray::export(&scene, name)
+}
+
+#[test]
+fn test01_sphere_identity() {
+    insta::assert_snapshot!(sdl("prim_sphere_identity"));
+}
+
+#[test]
+fn test02_asymmetric_window_camera() {
+    insta::assert_snapshot!(sdl("cam_asymmetric"));
+}
+
+#[test]
+fn test03_sheared_cone_matrix() {
+    insta::assert_snapshot!(sdl("prim_cone_shear"));
+}
+
+#[test]
+fn test04_glass_interior() {
+    insta::assert_snapshot!(sdl("shade_refract_sphere"));
+}
+
+#[test]
+fn test05_three_level_hierarchy() {
+    insta::assert_snapshot!(sdl("hier_three_levels"));
+}
+
+#[test]
+fn test06_mesh2() {
+    let s = sdl("prim_mesh_identity");
+    // The icosphere has 162 vertices and 320 faces, declared once.
+    assert_eq!(s.matches("#declare Mesh0 = mesh2").count(), 1);
+    assert!(s.contains("vertex_vectors { 162,") && s.contains("normal_vectors { 162,") && s.contains("face_indices { 320,"));
+    insta::assert_snapshot!(s);
+}
