@@ -21,4 +21,5 @@ mkdir -p "$HOME/.povray/3.7" && touch "$HOME/.povray/3.7/povray.conf"
 
 check=""
 if [ "${1:-}" = "--check" ]; then check="--check"; shift; fi
-cargo run --release -q -p conformance -- regen-povray $check "${1:-}"
+# The dev profile is optimized (Cargo.toml), and shares its build with `cargo test`.
+cargo run -q -p conformance -- regen-povray $check "${1:-}"
