@@ -17,13 +17,22 @@ fn manifest() -> Manifest {
 }
 
 fn entry(name: &str) -> Entry {
-    scenes("povray", name).unwrap().into_iter().find(|e| e.name == name).unwrap()
+    scenes("povray", name)
+        .unwrap()
+        .into_iter()
+        .find(|e| e.name == name)
+        .unwrap()
 }
 
 /// Renders a (modified) scene and compares it with the named scene's reference.
 fn against_reference(scene: &Scene, name: &str) -> Comparison {
     let img = render_for_conformance(scene);
-    let (w, h, rgb) = read_reference(&repo_root().join("references/povray").join(format!("{name}.exr"))).unwrap();
+    let (w, h, rgb) = read_reference(
+        &repo_root()
+            .join("references/povray")
+            .join(format!("{name}.exr")),
+    )
+    .unwrap();
     compare(&img.rgb, &rgb, w, h)
 }
 
@@ -37,21 +46,58 @@ fn test01_every_catalog_scene_passes_against_povray() {
         if o.verdict != Verdict::Pass {
             let detail = o
                 .cmp
-                .map(|c| format!("{} failing, {} silhouette (budget {}), max abs {:.2e}", c.failing, c.silhouette, c.budget(), c.max_abs))
+                .map(|c| {
+                    format!(
+                        "{} failing, {} silhouette (budget {}), max abs {:.2e}",
+                        c.failing,
+                        c.silhouette,
+                        c.budget(),
+                        c.max_abs
+                    )
+                })
                 .unwrap_or_default();
             bad.push(format!("{}: {} {detail}", e.name, o.verdict));
         }
     }
-    assert!(bad.is_empty(), "{} of {} scenes do not pass:\n{}", bad.len(), all.len(), bad.join("\n"));
+    assert!(
+        bad.is_empty(),
+        "{} of {} scenes do not pass:\n{}",
+        bad.len(),
+        all.len(),
+        bad.join("\n")
+    );
 }
 
 #[test]
 fn test02_catalog_covers_the_required_features() {
-    let names: Vec<String> = scenes("povray", "").unwrap().into_iter().map(|e| e.name).collect();
+    let names: Vec<String> = scenes("povray", "")
+        .unwrap()
+        .into_iter()
+        .map(|e| e.name)
+        .collect();
     let has = |n: &str| names.iter().any(|x| x == n);
     assert!(names.iter().filter(|n| n.starts_with("cam_")).count() >= 8);
-    for p in ["sphere", "plane", "box", "cylinder", "cylopen", "cone", "disk", "rectangle", "triangle", "mesh"] {
-        for t in ["identity", "translate", "rotate", "scale", "nonuniform", "shear", "mirror"] {
+    for p in [
+        "sphere",
+        "plane",
+        "box",
+        "cylinder",
+        "cylopen",
+        "cone",
+        "disk",
+        "rectangle",
+        "triangle",
+        "mesh",
+    ] {
+        for t in [
+            "identity",
+            "translate",
+            "rotate",
+            "scale",
+            "nonuniform",
+            "shear",
+            "mirror",
+        ] {
             assert!(has(&format!("prim_{p}_{t}")), "prim_{p}_{t} is missing");
         }
     }
@@ -74,8 +120,12 @@ fn test02_catalog_covers_the_required_features() {
     // The non-square pixel array really is non-square.
     let (s, _) = load(&entry("cam_nonsquare")).unwrap();
     let w = s.camera.model.window;
-    let pixel_aspect = ((w.right - w.left) / s.settings.width as f64) / ((w.top - w.bottom) / s.settings.height as f64);
-    assert!((pixel_aspect - 0.5).abs() < 1e-12, "pixels are 2:1 tall, got aspect {pixel_aspect}");
+    let pixel_aspect = ((w.right - w.left) / s.settings.width as f64)
+        / ((w.top - w.bottom) / s.settings.height as f64);
+    assert!(
+        (pixel_aspect - 0.5).abs() < 1e-12,
+        "pixels are 2:1 tall, got aspect {pixel_aspect}"
+    );
 }
 
 #[test]
@@ -87,7 +137,14 @@ fn test03_a_stale_reference_is_never_a_pass() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("prim_sphere_identity.toml");
     std::fs::write(&path, text).unwrap();
-    let o = check_povray(&Entry { name: e.name.clone(), path }, &manifest()).unwrap();
+    let o = check_povray(
+        &Entry {
+            name: e.name.clone(),
+            path,
+        },
+        &manifest(),
+    )
+    .unwrap();
     assert!(o.cmp.as_ref().unwrap().passed(), "the pixels still agree");
     assert_eq!(o.verdict, Verdict::Stale);
     // And a scene with no record is missing, not passing.
@@ -101,7 +158,10 @@ fn test03_a_stale_reference_is_never_a_pass() {
 fn test04_a_half_pixel_shift_of_the_window_fails() {
     for name in ["hier_three_levels", "shade_diffuse", "cam_oblique_roll"] {
         let (mut s, _) = load(&entry(name)).unwrap();
-        assert!(against_reference(&s, name).passed(), "{name} passes unshifted");
+        assert!(
+            against_reference(&s, name).passed(),
+            "{name} passes unshifted"
+        );
         let mut m = s.camera.model;
         let half = 0.5 * (m.window.right - m.window.left) / m.cols as f64;
         m.window = Window {
@@ -111,18 +171,37 @@ fn test04_a_half_pixel_shift_of_the_window_fails() {
         };
         s.camera = Camera::new(m).unwrap();
         let c = against_reference(&s, name);
-        eprintln!("half-pixel shift, {name}: {} failing, {} silhouette (budget {})", c.failing, c.silhouette, c.budget());
-        assert!(!c.passed(), "{name}: a half-pixel shift passed ({} failing, {} silhouette)", c.failing, c.silhouette);
+        eprintln!(
+            "half-pixel shift, {name}: {} failing, {} silhouette (budget {})",
+            c.failing,
+            c.silhouette,
+            c.budget()
+        );
+        assert!(
+            !c.passed(),
+            "{name}: a half-pixel shift passed ({} failing, {} silhouette)",
+            c.failing,
+            c.silhouette
+        );
     }
 }
 
 #[test]
 fn test05_a_one_percent_change_in_a_light_fails() {
-    for name in ["shade_shadows_two_lights", "prim_cone_rotate", "hier_instanced"] {
+    for name in [
+        "shade_shadows_two_lights",
+        "prim_cone_rotate",
+        "hier_instanced",
+    ] {
         let (mut s, _) = load(&entry(name)).unwrap();
         s.lights[0].color *= 1.01;
         let c = against_reference(&s, name);
-        eprintln!("1 % light, {name}: {} failing, {} silhouette (budget {})", c.failing, c.silhouette, c.budget());
+        eprintln!(
+            "1 % light, {name}: {} failing, {} silhouette (budget {})",
+            c.failing,
+            c.silhouette,
+            c.budget()
+        );
         assert!(!c.passed(), "{name}: a 1 % brighter light passed");
         assert!(c.failing > 100, "{name}: only {} failing pixels", c.failing);
     }
@@ -132,7 +211,11 @@ fn test05_a_one_percent_change_in_a_light_fails() {
 fn test06_a_one_degree_rotation_of_one_object_fails() {
     // (scene, object id): a box, the table top of the hierarchy, a faceted mesh. (A sphere
     // turned about its own centre would not change, so it is not a fair case.)
-    for (name, id) in [("prim_box_identity", 1), ("hier_three_levels", 2), ("prim_mesh_rotate", 1)] {
+    for (name, id) in [
+        ("prim_box_identity", 1),
+        ("hier_three_levels", 2),
+        ("prim_mesh_rotate", 1),
+    ] {
         let (mut s, _) = load(&entry(name)).unwrap();
         // Rotate the object by 1° about the vertical axis through its own origin.
         let mut instances = s.root.instances.clone();
@@ -148,7 +231,17 @@ fn test06_a_one_degree_rotation_of_one_object_fails() {
         inst.xf = Some(Transform::new(&placed).unwrap());
         s.root = Aggregate::new(instances);
         let c = against_reference(&s, name);
-        eprintln!("1° rotation, {name}: {} failing, {} silhouette (budget {})", c.failing, c.silhouette, c.budget());
-        assert!(!c.passed(), "{name}: a 1° rotation passed ({} failing, {} silhouette)", c.failing, c.silhouette);
+        eprintln!(
+            "1° rotation, {name}: {} failing, {} silhouette (budget {})",
+            c.failing,
+            c.silhouette,
+            c.budget()
+        );
+        assert!(
+            !c.passed(),
+            "{name}: a 1° rotation passed ({} failing, {} silhouette)",
+            c.failing,
+            c.silhouette
+        );
     }
 }

@@ -6,7 +6,11 @@ use conformance::catalog::scenes;
 use conformance::harness::load;
 
 fn sdl(name: &str) -> String {
-    let e = scenes("povray", name).unwrap().into_iter().find(|e| e.name == name).unwrap();
+    let e = scenes("povray", name)
+        .unwrap()
+        .into_iter()
+        .find(|e| e.name == name)
+        .unwrap();
     let (scene, _) = load(&e).unwrap();
     conformance::povray::export(&scene, name)
 }
@@ -41,6 +45,10 @@ fn test06_mesh2() {
     let s = sdl("prim_mesh_identity");
     // The icosphere has 162 vertices and 320 faces, declared once.
     assert_eq!(s.matches("#declare Mesh0 = mesh2").count(), 1);
-    assert!(s.contains("vertex_vectors { 162,") && s.contains("normal_vectors { 162,") && s.contains("face_indices { 320,"));
+    assert!(
+        s.contains("vertex_vectors { 162,")
+            && s.contains("normal_vectors { 162,")
+            && s.contains("face_indices { 320,")
+    );
     insta::assert_snapshot!(s);
 }
