@@ -5,6 +5,7 @@ pub mod catalog;
 pub mod compare;
 pub mod harness;
 pub mod manifest;
+pub mod mitsuba;
 pub mod povray;
 pub mod refgen;
 pub mod report;

@@ -33,6 +33,20 @@ enum Cmd {
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// Export a scene file to Mitsuba 3 XML (meshes are written beside it).
+    ExportMitsuba {
+        /// The scene file.
+        scene: PathBuf,
+        /// Output .xml file.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Samples per pixel for the sampler.
+        #[arg(long, default_value_t = 64)]
+        spp: u32,
+        /// Wrap the integrator in Mitsuba's `moment` integrator.
+        #[arg(long)]
+        moment: bool,
+    },
     /// Regenerate POV-Ray references (needs povray; see scripts/regen-povray.sh).
     RegenPovray {
         /// Only scenes whose name contains this.
@@ -83,6 +97,18 @@ fn run() -> Result<ExitCode> {
                 .unwrap_or_default();
             let sdl = conformance::povray::export(&s, &title);
             std::fs::write(&output, sdl)
+                .with_context(|| format!("writing {}", output.display()))?;
+            Ok(ExitCode::SUCCESS)
+        }
+        Cmd::ExportMitsuba {
+            scene,
+            output,
+            spp,
+            moment,
+        } => {
+            let s = renderer::scene::Scene::load(&scene)?;
+            let e = conformance::mitsuba::export(&s, spp, moment)?;
+            e.write(&output)
                 .with_context(|| format!("writing {}", output.display()))?;
             Ok(ExitCode::SUCCESS)
         }

@@ -7,6 +7,7 @@ pub mod aggregate;
 pub mod bvh;
 pub mod camera;
 pub mod output;
+pub mod physical;
 pub mod ray;
 pub mod real;
 pub mod render;

@@ -1,8 +1,9 @@
 //! The render loop: rows in parallel through rayon, each pixel independent, so the
 //! output is bit-identical for any thread count. Nothing here allocates per pixel.
 
+use crate::physical::{Integrator, PhysicalIntegrator};
 use crate::real::{dvec3, Real};
-use crate::sampler::pixel_offset;
+use crate::sampler::PixelSampler;
 use crate::scene::{Color, Scene};
 use crate::shading::Shader;
 use crate::spawn::Spawn;
@@ -70,6 +71,9 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
     );
     let spp = scene.settings.samples;
     let shader = Shader::new(scene, opts.spawn);
+    let physical = PhysicalIntegrator::new(scene, opts.spawn);
+    let classic = scene.settings.integrator == Integrator::Classic;
+    let kind = scene.settings.sampler;
     let bar = progress_bar(h as u64, opts.progress);
     let mut rgb = vec![0f32; w * h * 3];
     let mut aov = opts.aov.then(|| Aov {
@@ -87,9 +91,21 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
                 let pixel = (j * w + i) as u64;
                 let mut sum = Color::ZERO;
                 for s in 0..spp {
-                    let (dx, dy) = pixel_offset(pixel, s, spp);
+                    let mut smp = PixelSampler::new(kind, pixel, s, spp);
+                    // The classic model samples the pixel centre at 1 spp, as POV-Ray does
+                    // with antialiasing off; otherwise positions are uniform in the pixel
+                    // (a box filter, as Mitsuba's).
+                    let (dx, dy) = if classic && spp == 1 {
+                        (0.5, 0.5)
+                    } else {
+                        smp.next_2d()
+                    };
                     let ray = scene.camera.ray_at(i as f64 + dx, j as f64 + dy);
-                    sum += shader.trace_primary(&ray);
+                    sum += if classic {
+                        shader.trace_primary(&ray)
+                    } else {
+                        physical.li(&ray, &mut smp)
+                    };
                 }
                 let c = sum / spp as f32;
                 for k in 0..3 {

@@ -147,14 +147,43 @@ fn test10_fields_must_match_the_kind() {
 fn test11_render_settings_are_validated() {
     check(
         &CAMERA.replace("width = 8", "width = 0"),
-        9,
+        10,
         "render.width",
         "at least 1",
     );
     let text = format!("{CAMERA}samples = 0\n");
-    check(&text, 9, "render.samples", "at least 1");
+    check(&text, 12, "render.samples", "at least 1");
     let text = format!("{CAMERA}\n[materials.m]\nior = -1.5\n");
     check(&text, 14, "materials.m.ior", "≥ 0");
+}
+
+#[test]
+fn test11b_models_must_match_the_integrator() {
+    let text = format!("{CAMERA}\n[materials.m]\nmodel = \"diffuse\"\n");
+    check(&text, 14, "materials.m.model", "needs render.integrator");
+    let text = format!(
+        "{}\n[materials.m]\ncolor = [1, 1, 1]\n",
+        CAMERA.replace("height = 8", "height = 8\nintegrator = \"path\"")
+    );
+    // `model` is not written: the error points at the material's table.
+    check(&text, 14, "materials.m.model", "need model");
+    let text = format!("{CAMERA}\n[[lights]]\ntype = \"directional\"\ndirection = [0, -1, 0]\n");
+    check(
+        &text,
+        14,
+        "lights[0].type",
+        "need the direct or path integrator",
+    );
+    let path = CAMERA.replace("height = 8", "height = 8\nintegrator = \"path\"");
+    let text = format!("{path}\n[[lights]]\ntype = \"directional\"\n");
+    check(&text, 14, "lights[0].direction", "needs a direction");
+    let text = format!("{path}\n[materials.glow]\nmodel = \"diffuse\"\nradiance = [1, 1, 1]\n\n[[objects]]\ntype = \"box\"\nmaterial = \"glow\"\n");
+    check(
+        &text,
+        20,
+        "objects[0].material",
+        "only be on a sphere or a rectangle",
+    );
 }
 
 #[test]

@@ -6,10 +6,11 @@
 //! so a definition instanced many times is stored once. Meshes are loaded once per file.
 
 use super::error::{SceneError, Source};
-use super::format::{self, CameraDesc, NodeDesc, NodeKind, ScaleArg, TransformOp, V3};
-use super::{Color, Light, Material, Scene, Settings};
+use super::format::{self, CameraDesc, LightKind, NodeDesc, NodeKind, ScaleArg, TransformOp, V3};
+use super::{Color, Light, Material, MaterialModel, Scene, Settings};
 use crate::aggregate::{Aggregate, Instance, INHERIT};
 use crate::camera::{Camera, CameraError, ViewingModel, Window};
+use crate::physical::{AreaLight, Integrator};
 use crate::real::{vec3, Real, Vec2};
 use crate::shapes::{Mesh, Shape, Triangle};
 use crate::transform::{Affine64, Transform};
@@ -40,7 +41,7 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
     })?;
     let r = desc.render.get_ref();
     let at_render = |field: &str, msg: &str| {
-        src.error(desc.render.span().start, format!("render.{field}"), msg)
+        src.key_error(desc.render.span(), field, format!("render.{field}"), msg)
     };
     if r.width == 0 || r.height == 0 {
         return Err(at_render("width", "width and height must be at least 1"));
@@ -67,7 +68,11 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
         adc_bailout: r.adc_bailout as f32,
         background: color(r.background),
         ambient_light: color(r.ambient_light),
+        integrator: r.integrator,
+        rr_depth: r.rr_depth,
+        sampler: r.sampler,
     };
+    let classic = r.integrator == Integrator::Classic;
     let camera = build_camera(&desc.camera, r.width, r.height, &src)?;
 
     let mut lights = Vec::new();
@@ -75,8 +80,39 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
         let d = l.get_ref();
         let field = format!("lights[{k}]");
         let err = |f: &str, m: &str| src.key_error(l.span(), f, format!("{field}.{f}"), m);
-        if d.position.iter().any(|x| !x.is_finite()) {
-            return Err(err("position", "must be finite"));
+        let (mut position, mut direction) = (DVec3::ZERO, DVec3::ZERO);
+        match d.kind {
+            LightKind::Point => {
+                let p = d
+                    .position
+                    .ok_or_else(|| err("position", "a point light needs a position"))?;
+                if p.iter().any(|x| !x.is_finite()) {
+                    return Err(err("position", "must be finite"));
+                }
+                position = dv(p);
+            }
+            LightKind::Directional => {
+                let v = dv(d
+                    .direction
+                    .ok_or_else(|| err("direction", "a directional light needs a direction"))?);
+                if !(v.length() > 0.0 && v.is_finite()) {
+                    return Err(err("direction", "must be a finite, non-zero vector"));
+                }
+                direction = v.normalize();
+            }
+            LightKind::Environment => {}
+        }
+        if d.kind != LightKind::Point && classic {
+            return Err(err(
+                "type",
+                "directional and environment lights need the direct or path integrator",
+            ));
+        }
+        if d.kind != LightKind::Point && d.position.is_some() {
+            return Err(err("position", "only point lights have a position"));
+        }
+        if d.kind != LightKind::Directional && d.direction.is_some() {
+            return Err(err("direction", "only directional lights have a direction"));
         }
         if d.color.iter().any(|x| !x.is_finite() || *x < 0.0) {
             return Err(err("color", "components must be finite and ≥ 0"));
@@ -94,7 +130,9 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
             _ => None,
         };
         lights.push(Light {
-            position: vec3(dv(d.position)),
+            kind: d.kind,
+            position: vec3(position),
+            direction: vec3(direction),
             color: color(d.color),
             fade,
         });
@@ -135,9 +173,31 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
         if d.ior == 0.0 {
             return Err(err("ior", "must be > 0"));
         }
+        if classic != (d.model == MaterialModel::Classic) {
+            return Err(err(
+                "model",
+                if classic {
+                    "a physical material needs render.integrator = \"direct\" or \"path\""
+                } else {
+                    "the direct and path integrators need model = \"diffuse\", \"conductor\" or \"dielectric\""
+                },
+            ));
+        }
+        let radiance = d.radiance.unwrap_or([0.0; 3]);
+        if radiance.iter().any(|x| !x.is_finite() || *x < 0.0) {
+            return Err(err("radiance", "components must be finite and ≥ 0"));
+        }
+        if classic && d.radiance.is_some() {
+            return Err(err(
+                "radiance",
+                "area lights need the direct or path integrator",
+            ));
+        }
         material_index.insert(name.clone(), materials.len() as u32);
         materials.push(Material {
             name: name.clone(),
+            model: d.model,
+            radiance: color(radiance),
             color: color(d.color),
             filter: d.filter as f32,
             transmit: d.transmit as f32,
@@ -154,8 +214,13 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
         });
     }
 
+    let emissive: Vec<bool> = materials
+        .iter()
+        .map(|m| m.radiance != Color::ZERO)
+        .collect();
     let mut b = Builder {
         src: &src,
+        emissive,
         base: base.to_path_buf(),
         materials: material_index,
         defs: &desc.defs,
@@ -176,13 +241,27 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
         )?;
     }
     let objects = std::mem::take(&mut b.objects);
+    let root = Aggregate::new(instances);
+    let mut area_lights = Vec::new();
+    let mut area_light_of = vec![u32::MAX; objects.len() + 1];
+    for inst in &root.instances {
+        if materials[inst.material as usize].radiance != Color::ZERO {
+            area_light_of[inst.object_id as usize] = area_lights.len() as u32;
+            area_lights.push(AreaLight::new(
+                inst,
+                materials[inst.material as usize].radiance,
+            ));
+        }
+    }
     Ok(Scene {
         camera,
         settings,
         lights,
         materials,
-        root: Aggregate::new(instances),
+        root,
         objects,
+        area_lights,
+        area_light_of,
     })
 }
 
@@ -305,6 +384,7 @@ pub fn op_affine(op: &TransformOp) -> Result<Affine64, String> {
 
 struct Builder<'a> {
     src: &'a Source<'a>,
+    emissive: Vec<bool>,
     base: PathBuf,
     materials: HashMap<String, u32>,
     defs: &'a BTreeMap<String, Spanned<NodeDesc>>,
@@ -448,6 +528,20 @@ impl Builder<'_> {
                     .map_err(|e| err("transform", &format!("composed with its parents: {e}")))?,
             )
         };
+        if material != INHERIT && self.emissive[material as usize] {
+            if !matches!(shape, Shape::Sphere | Shape::Rectangle) {
+                return Err(err(
+                    "material",
+                    &"an emitting material (radiance) can only be on a sphere or a rectangle",
+                ));
+            }
+            if !numbered {
+                return Err(err(
+                    "material",
+                    &"an emitting material cannot be used inside a definition",
+                ));
+            }
+        }
         let object_id = if numbered {
             self.objects.push(path.to_string());
             self.objects.len() as u32

@@ -115,6 +115,15 @@ pub struct RenderDesc {
     /// Global ambient light (POV-Ray's ambient_light).
     #[serde(default = "white")]
     pub ambient_light: V3,
+    /// Light transport: POV-Ray's classic model, or Mitsuba's `direct` or `path`.
+    #[serde(default)]
+    pub integrator: crate::physical::Integrator,
+    /// Path integrator: depth from which Russian roulette starts.
+    #[serde(default = "five")]
+    pub rr_depth: u32,
+    /// How samples are placed.
+    #[serde(default)]
+    pub sampler: crate::sampler::SamplerKind,
 }
 
 fn one() -> u32 {
@@ -130,13 +139,32 @@ fn white() -> V3 {
     [1.0; 3]
 }
 
-/// A point light.
+/// Kinds of light.
+#[derive(Debug, Deserialize, Clone, Copy, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum LightKind {
+    /// A point light at `position`.
+    #[default]
+    Point,
+    /// A directional light travelling along `direction`.
+    Directional,
+    /// A constant environment around the scene.
+    Environment,
+}
+
+/// A light.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
-    /// Position.
-    pub position: V3,
-    /// Colour (intensity per channel).
+    /// Kind of light.
+    #[serde(rename = "type", default)]
+    pub kind: LightKind,
+    /// Point lights: position.
+    pub position: Option<V3>,
+    /// Directional lights: the direction the light travels.
+    pub direction: Option<V3>,
+    /// Colour: POV-Ray's light colour (classic); intensity in W/sr (point), irradiance
+    /// (directional) or radiance (environment) for the physical integrators.
     #[serde(default = "white")]
     pub color: V3,
     /// Distance at which the fade factor is 1.
@@ -145,10 +173,16 @@ pub struct LightDesc {
     pub fade_power: Option<f64>,
 }
 
-/// A material: POV-Ray's pigment and finish, parameter for parameter.
+/// A material: POV-Ray's pigment and finish, parameter for parameter (model `classic`),
+/// or one of the physical models.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialDesc {
+    /// `classic` (POV-Ray finish), `diffuse`, `conductor` or `dielectric`.
+    #[serde(default)]
+    pub model: crate::scene::MaterialModel,
+    /// Emitted radiance (physical integrators): makes a sphere or rectangle an area light.
+    pub radiance: Option<V3>,
     /// Pigment colour.
     #[serde(default = "white")]
     pub color: V3,

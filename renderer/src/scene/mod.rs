@@ -31,24 +31,55 @@ pub struct Settings {
     pub background: Color,
     /// Global ambient light.
     pub ambient_light: Color,
+    /// Light transport.
+    pub integrator: crate::physical::Integrator,
+    /// Depth from which the path integrator plays Russian roulette.
+    pub rr_depth: u32,
+    /// Sample placement.
+    pub sampler: crate::sampler::SamplerKind,
 }
 
-/// A point light.
+pub use format::LightKind;
+
+/// A light.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Light {
-    /// Position.
+    /// Kind.
+    pub kind: LightKind,
+    /// Position (point lights; zero otherwise).
     pub position: Vec3,
+    /// Unit direction the light travels (directional lights; zero otherwise).
+    pub direction: Vec3,
     /// Colour.
     pub color: Color,
     /// Fade distance and power, when fading is on.
     pub fade: Option<(Real, Real)>,
 }
 
-/// POV-Ray's pigment and finish, parameter for parameter.
+/// Which reflectance model a material uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MaterialModel {
+    /// POV-Ray's pigment and finish (the classic integrator).
+    #[default]
+    Classic,
+    /// Lambertian: `color` is the reflectance.
+    Diffuse,
+    /// A perfect mirror: `color` is the specular reflectance.
+    Conductor,
+    /// A smooth dielectric with Fresnel reflection and refraction; `ior` inside, 1 outside.
+    Dielectric,
+}
+
+/// A material: POV-Ray's pigment and finish, parameter for parameter, or a physical model.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     /// Name in the scene file.
     pub name: String,
+    /// Reflectance model.
+    pub model: MaterialModel,
+    /// Emitted radiance (area lights; zero when not emitting).
+    pub radiance: Color,
     /// Pigment colour.
     pub color: Color,
     /// Filtered transparency.
@@ -82,6 +113,8 @@ impl Default for Material {
     fn default() -> Self {
         Material {
             name: "default".into(),
+            model: MaterialModel::Classic,
+            radiance: Color::ZERO,
             color: Color::ONE,
             filter: 0.0,
             transmit: 0.0,
@@ -114,6 +147,10 @@ pub struct Scene {
     pub root: Aggregate,
     /// Scene-file path of each object id (id k is at index k − 1).
     pub objects: Vec<String>,
+    /// Area lights (emissive spheres and rectangles).
+    pub area_lights: Vec<crate::physical::AreaLight>,
+    /// For each object id, the index of its area light, or `u32::MAX`.
+    pub area_light_of: Vec<u32>,
 }
 
 impl Scene {

@@ -1,0 +1,474 @@
+//! The physically based model: radiometric, in linear RGB, following Mitsuba 3's
+//! definitions so that the same numbers mean the same image
+//! (renderer/docs/physical.md cites the Mitsuba source for each).
+//!
+//! - BSDFs: Lambertian `diffuse` (reflectance/π, two-sided), smooth `conductor` (a perfect
+//!   mirror scaled by its specular reflectance), smooth `dielectric` (Fresnel reflection
+//!   and refraction, interior ior over exterior 1).
+//! - Lights: `point` (intensity, W/sr), `directional` (irradiance), area lights (emissive
+//!   spheres and rectangles, radiance on the side of their normal), and a constant
+//!   `environment` (radiance).
+//! - Integrators: `direct` (emitters seen directly or through one BSDF sample, plus light
+//!   sampling at the first hit, combined by multiple importance sampling) and `path`
+//!   (unidirectional path tracing with next-event estimation, MIS, `max_depth` and Russian
+//!   roulette from `rr_depth`).
+
+use crate::aggregate::{Hit, Instance};
+use crate::ray::Ray;
+use crate::real::{Real, Vec3};
+use crate::sampler::PixelSampler;
+use crate::scene::{Color, LightKind, Material, MaterialModel, Scene};
+use crate::shapes::Shape;
+use crate::spawn::Spawn;
+use crate::transform::Transform;
+use std::f64::consts::PI;
+
+/// Light transport.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Integrator {
+    /// POV-Ray 3.7's classic model (shading.rs).
+    #[default]
+    Classic,
+    /// Mitsuba's `direct`.
+    Direct,
+    /// Mitsuba's `path`.
+    Path,
+}
+
+/// An emissive sphere or rectangle placed by a transform.
+#[derive(Clone, Debug)]
+pub struct AreaLight {
+    /// `Sphere` or `Rectangle`.
+    pub shape: Shape,
+    /// `world_from_object`, if any.
+    pub xf: Option<Transform>,
+    /// Emitted radiance.
+    pub radiance: Color,
+    /// |det M| of the transform (1 without one).
+    det: Real,
+}
+
+impl AreaLight {
+    /// The area light of an emissive instance (a sphere or a rectangle).
+    pub fn new(inst: &Instance, radiance: Color) -> Self {
+        let det = inst.xf.map_or(1.0, |x| x.matrix().determinant().abs());
+        AreaLight {
+            shape: inst.shape.clone(),
+            xf: inst.xf,
+            radiance,
+            det,
+        }
+    }
+
+    /// Surface area of the canonical shape.
+    fn object_area(&self) -> Real {
+        match self.shape {
+            Shape::Sphere => (4.0 * PI) as Real,
+            _ => 4.0,
+        }
+    }
+
+    /// Density (per world area) of [`AreaLight::sample`] at a point whose unnormalized
+    /// world normal is `m⁻ᵀ·n_obj` (`n_world`, as every hit reports it). Uniform in object
+    /// space, so the world density is `1 / (A_obj · |det M| · |m⁻ᵀ n_obj|)`.
+    #[inline]
+    pub fn pdf_area(&self, n_world: Vec3) -> Real {
+        let stretch = if self.xf.is_some() {
+            n_world.length()
+        } else {
+            1.0
+        };
+        1.0 / (self.object_area() * self.det * stretch)
+    }
+
+    /// A point uniform (in object space) on the light: world point and unnormalized world
+    /// normal.
+    fn sample(&self, u: (f64, f64)) -> (Vec3, Vec3) {
+        let (p, n) = match self.shape {
+            Shape::Sphere => {
+                let z = 1.0 - 2.0 * u.0;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let phi = 2.0 * PI * u.1;
+                let v = Vec3::new((r * phi.cos()) as Real, z as Real, (r * phi.sin()) as Real);
+                (v, v)
+            }
+            _ => (
+                Vec3::new((2.0 * u.0 - 1.0) as Real, 0.0, (2.0 * u.1 - 1.0) as Real),
+                Vec3::Y,
+            ),
+        };
+        match &self.xf {
+            Some(x) => (x.point(p), x.normal(n)),
+            None => (p, n),
+        }
+    }
+}
+
+/// Unpolarized Fresnel reflectance of a smooth dielectric for `cos_i` (> 0 on the side the
+/// light comes from) and relative ior `eta` = η_transmitted / η_incident. Returns
+/// (F, cos_t); F = 1 on total internal reflection.
+fn fresnel(cos_i: f64, eta: f64) -> (f64, f64) {
+    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
+    if sin2_t >= 1.0 {
+        return (1.0, 0.0);
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    (0.5 * (rs * rs + rp * rp), cos_t)
+}
+
+/// Power heuristic weight of strategy a against b (Veach; Mitsuba's `mis_weight`).
+#[inline]
+fn mis(a: f64, b: f64) -> f64 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 {
+        a2 / (a2 + b2)
+    } else {
+        0.0
+    }
+}
+
+fn dv(v: Vec3) -> glam::DVec3 {
+    crate::real::dvec3(v)
+}
+
+fn rv(v: glam::DVec3) -> Vec3 {
+    crate::real::vec3(v)
+}
+
+fn rgb(c: Color) -> glam::DVec3 {
+    glam::DVec3::new(c.x as f64, c.y as f64, c.z as f64)
+}
+
+/// A local frame around unit `n`.
+fn frame(n: glam::DVec3) -> (glam::DVec3, glam::DVec3) {
+    let s = if n.z < 0.0 { -1.0 } else { 1.0 };
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    (
+        glam::DVec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x),
+        glam::DVec3::new(b, s + n.y * n.y * a, -n.y),
+    )
+}
+
+/// A sampled BSDF direction.
+struct BsdfSample {
+    dir: glam::DVec3,
+    /// f·|cos|/pdf (or the delta weight).
+    weight: glam::DVec3,
+    /// Solid-angle density; 0 for delta lobes.
+    pdf: f64,
+    /// Relative ior crossed (η_t/η_i) for refraction, else 1 (for Russian roulette).
+    eta: f64,
+}
+
+/// The surface at a hit, oriented for shading.
+struct Surface<'a> {
+    p: Vec3,
+    err: Vec3,
+    /// Unit geometric normal, outward.
+    ng: glam::DVec3,
+    /// Unit shading normal, outward.
+    ns: glam::DVec3,
+    m: &'a Material,
+    object_id: u32,
+    n_world: Vec3,
+}
+
+impl Surface<'_> {
+    fn is_delta(&self) -> bool {
+        self.m.model != MaterialModel::Diffuse
+    }
+
+    /// Lambertian f·cos for incoming `wo` (towards the viewer) and `wi` (towards the
+    /// light): zero unless both are on the same side of the surface (two-sided).
+    fn eval_diffuse(&self, wo: glam::DVec3, wi: glam::DVec3) -> (glam::DVec3, f64) {
+        let (co, ci) = (self.ns.dot(wo), self.ns.dot(wi));
+        if co * ci <= 0.0 || self.ng.dot(wo) * self.ng.dot(wi) <= 0.0 {
+            return (glam::DVec3::ZERO, 0.0);
+        }
+        let cos = ci.abs();
+        (rgb(self.m.color) * (cos / PI), cos / PI)
+    }
+
+    fn sample(&self, wo: glam::DVec3, s: &mut PixelSampler) -> Option<BsdfSample> {
+        let side = if self.ns.dot(wo) >= 0.0 { 1.0 } else { -1.0 };
+        let n = self.ns * side;
+        match self.m.model {
+            MaterialModel::Diffuse => {
+                let (u1, u2) = s.next_2d();
+                let r = u1.sqrt();
+                let phi = 2.0 * PI * u2;
+                let (t, b) = frame(n);
+                let local_z = (1.0 - u1).max(0.0).sqrt();
+                let dir = t * (r * phi.cos()) + b * (r * phi.sin()) + n * local_z;
+                let (f, pdf) = self.eval_diffuse(wo, dir);
+                if pdf <= 0.0 {
+                    return None;
+                }
+                Some(BsdfSample {
+                    dir,
+                    weight: f / pdf,
+                    pdf,
+                    eta: 1.0,
+                })
+            }
+            MaterialModel::Conductor => {
+                s.next_1d();
+                Some(BsdfSample {
+                    dir: n * (2.0 * n.dot(wo)) - wo,
+                    weight: rgb(self.m.color),
+                    pdf: 0.0,
+                    eta: 1.0,
+                })
+            }
+            MaterialModel::Dielectric => {
+                let u = s.next_1d();
+                let cos_i = n.dot(wo);
+                // Outside when the viewer is on the outward side of the geometry.
+                let outside = self.ng.dot(wo) > 0.0;
+                let eta = if outside {
+                    self.m.ior as f64
+                } else {
+                    1.0 / self.m.ior as f64
+                };
+                let (f, cos_t) = fresnel(cos_i, eta);
+                if u < f {
+                    Some(BsdfSample {
+                        dir: n * (2.0 * cos_i) - wo,
+                        weight: glam::DVec3::ONE,
+                        pdf: 0.0,
+                        eta: 1.0,
+                    })
+                } else {
+                    let dir = -wo / eta + n * (cos_i / eta - cos_t);
+                    // Radiance is compressed into a smaller solid angle when entering a
+                    // denser medium: the transmitted weight is 1/η².
+                    Some(BsdfSample {
+                        dir,
+                        weight: glam::DVec3::splat(1.0 / (eta * eta)),
+                        pdf: 0.0,
+                        eta,
+                    })
+                }
+            }
+            MaterialModel::Classic => None,
+        }
+    }
+}
+
+/// The physically based integrators.
+pub struct PhysicalIntegrator<'a> {
+    scene: &'a Scene,
+    spawn: Spawn,
+    env: Option<glam::DVec3>,
+}
+
+impl<'a> PhysicalIntegrator<'a> {
+    /// An integrator for `scene`.
+    pub fn new(scene: &'a Scene, spawn: Spawn) -> Self {
+        let env = scene
+            .lights
+            .iter()
+            .filter(|l| l.kind == LightKind::Environment)
+            .map(|l| rgb(l.color))
+            .reduce(|a, b| a + b);
+        PhysicalIntegrator { scene, spawn, env }
+    }
+
+    fn surface(&self, hit: &Hit) -> Surface<'a> {
+        let ng = dv(hit.n_geo).normalize();
+        let mut ns = dv(hit.n_shade).normalize();
+        if !ns.is_finite() {
+            ns = ng;
+        }
+        Surface {
+            p: hit.p,
+            err: hit.err,
+            ng,
+            ns,
+            m: self.scene.material(hit.material),
+            object_id: hit.object_id,
+            n_world: hit.n_geo,
+        }
+    }
+
+    /// Radiance emitted by the surface towards `wo` (area lights emit on the normal side).
+    fn emitted(&self, s: &Surface, wo: glam::DVec3) -> glam::DVec3 {
+        if s.m.radiance == Color::ZERO || s.ng.dot(wo) <= 0.0 {
+            return glam::DVec3::ZERO;
+        }
+        rgb(s.m.radiance)
+    }
+
+    /// Solid-angle density of light sampling having produced the emitter hit `s`, seen
+    /// from `from` along `dir` at distance `t`.
+    fn light_pdf_at(&self, s: &Surface, dir: glam::DVec3, dist: f64) -> f64 {
+        let Some(&k) = self.scene.area_light_of.get(s.object_id as usize) else {
+            return 0.0;
+        };
+        if k == u32::MAX {
+            return 0.0;
+        }
+        let light = &self.scene.area_lights[k as usize];
+        let cos = s.ng.dot(-dir).abs();
+        if cos <= 0.0 {
+            return 0.0;
+        }
+        light.pdf_area(s.n_world) as f64 * dist * dist / cos
+    }
+
+    fn occluded(&self, s: &Surface, dir: glam::DVec3, dist: f64) -> bool {
+        let (ray, t_min) = self.spawn.ray(s.p, s.err, rv(s.ng), rv(dir));
+        let limit = if dist.is_finite() {
+            (dist * (1.0 - 1e-4)) as Real
+        } else {
+            Real::INFINITY
+        };
+        self.scene.root.occluded(&ray, t_min, limit)
+    }
+
+    /// Next-event estimation at a non-delta surface: every light once, area lights and the
+    /// environment weighted by MIS against BSDF sampling.
+    fn direct_light(&self, s: &Surface, wo: glam::DVec3, smp: &mut PixelSampler) -> glam::DVec3 {
+        let mut sum = glam::DVec3::ZERO;
+        let p = dv(s.p);
+        for light in &self.scene.lights {
+            match light.kind {
+                LightKind::Point => {
+                    let to = dv(light.position) - p;
+                    let d2 = to.length_squared();
+                    let dist = d2.sqrt();
+                    let wi = to / dist;
+                    let (f, _) = s.eval_diffuse(wo, wi);
+                    if f != glam::DVec3::ZERO && !self.occluded(s, wi, dist) {
+                        sum += f * rgb(light.color) / d2;
+                    }
+                }
+                LightKind::Directional => {
+                    let wi = -dv(light.direction);
+                    let (f, _) = s.eval_diffuse(wo, wi);
+                    if f != glam::DVec3::ZERO && !self.occluded(s, wi, f64::INFINITY) {
+                        sum += f * rgb(light.color);
+                    }
+                }
+                LightKind::Environment => {
+                    // Uniform over the sphere.
+                    let (u1, u2) = smp.next_2d();
+                    let z = 1.0 - 2.0 * u1;
+                    let r = (1.0 - z * z).max(0.0).sqrt();
+                    let phi = 2.0 * PI * u2;
+                    let wi = glam::DVec3::new(r * phi.cos(), r * phi.sin(), z);
+                    let pdf_l = 1.0 / (4.0 * PI);
+                    let (f, pdf_b) = s.eval_diffuse(wo, wi);
+                    if f != glam::DVec3::ZERO && !self.occluded(s, wi, f64::INFINITY) {
+                        sum += f * rgb(light.color) * (mis(pdf_l, pdf_b) / pdf_l);
+                    }
+                }
+            }
+        }
+        for light in &self.scene.area_lights {
+            let (q, n_world) = light.sample(smp.next_2d());
+            let to = dv(q) - p;
+            let d2 = to.length_squared();
+            let dist = d2.sqrt();
+            let wi = to / dist;
+            let nl = dv(n_world).normalize();
+            let cos_l = nl.dot(-wi);
+            if cos_l <= 0.0 {
+                continue; // The back of the light does not emit.
+            }
+            let pdf_l = light.pdf_area(n_world) as f64 * d2 / cos_l;
+            let (f, pdf_b) = s.eval_diffuse(wo, wi);
+            if f == glam::DVec3::ZERO || !pdf_l.is_finite() {
+                continue;
+            }
+            if !self.occluded(s, wi, dist) {
+                sum += f * rgb(light.radiance) * (mis(pdf_l, pdf_b) / pdf_l);
+            }
+        }
+        sum
+    }
+
+    /// Radiance along a camera ray.
+    pub fn li(&self, ray: &Ray, smp: &mut PixelSampler) -> Color {
+        let s = &self.scene.settings;
+        let v = match s.integrator {
+            Integrator::Path => self.path(ray, smp, s.max_depth, s.rr_depth),
+            _ => self.path(ray, smp, 2, u32::MAX),
+        };
+        Color::new(v.x as f32, v.y as f32, v.z as f32)
+    }
+
+    /// Path tracing with next-event estimation. `max_depth` counts path vertices after the
+    /// camera, as Mitsuba does: 1 shows emitters only, 2 adds direct light; `direct` is this
+    /// with `max_depth = 2`, where a delta lobe's sampled ray still sees emitters.
+    fn path(
+        &self,
+        ray: &Ray,
+        smp: &mut PixelSampler,
+        max_depth: u32,
+        rr_depth: u32,
+    ) -> glam::DVec3 {
+        let mut l = glam::DVec3::ZERO;
+        let mut beta = glam::DVec3::ONE;
+        let mut ray = *ray;
+        let mut t_min: Real = 0.0;
+        let mut prev_pdf = 0.0; // 0: the previous vertex was the camera or a delta lobe.
+        let mut eta_scale = 1.0;
+        let mut depth = 0u32;
+        loop {
+            let dir = dv(ray.d).normalize();
+            let Some(hit) = self.scene.root.intersect(&ray, t_min, Real::INFINITY) else {
+                if let Some(env) = self.env {
+                    let w = if prev_pdf > 0.0 {
+                        mis(prev_pdf, 1.0 / (4.0 * PI))
+                    } else {
+                        1.0
+                    };
+                    l += beta * env * w;
+                }
+                break;
+            };
+            let s = self.surface(&hit);
+            let wo = -dir;
+            let le = self.emitted(&s, wo);
+            if le != glam::DVec3::ZERO {
+                let dist = (dv(hit.p) - dv(ray.o)).length();
+                let w = if prev_pdf > 0.0 {
+                    mis(prev_pdf, self.light_pdf_at(&s, dir, dist))
+                } else {
+                    1.0
+                };
+                l += beta * le * w;
+            }
+            depth += 1;
+            if depth >= max_depth {
+                break;
+            }
+            if !s.is_delta() {
+                l += beta * self.direct_light(&s, wo, smp);
+            }
+            let Some(bs) = s.sample(wo, smp) else { break };
+            beta *= bs.weight;
+            prev_pdf = bs.pdf;
+            eta_scale *= bs.eta * bs.eta;
+            if depth >= rr_depth {
+                let q = (beta.max_element() * eta_scale).min(0.95);
+                if smp.next_1d() >= q {
+                    break;
+                }
+                beta /= q;
+            }
+            if beta == glam::DVec3::ZERO {
+                break;
+            }
+            let (r, tm) = self.spawn.ray(s.p, s.err, rv(s.ng), rv(bs.dir));
+            ray = r;
+            t_min = tm;
+        }
+        l
+    }
+}
