@@ -6,6 +6,8 @@ pub mod compare;
 pub mod harness;
 pub mod manifest;
 pub mod mitsuba;
+pub mod mitsuba_harness;
 pub mod povray;
 pub mod refgen;
 pub mod report;
+pub mod stats;

@@ -47,6 +47,19 @@ enum Cmd {
         #[arg(long)]
         moment: bool,
     },
+    /// Regenerate Mitsuba references (needs `pip install mitsuba`; see scripts/regen-mitsuba.sh).
+    RegenMitsuba {
+        /// Only scenes whose name contains this.
+        #[arg(default_value = "")]
+        filter: String,
+        /// Samples per pixel of the radiance references.
+        #[arg(long, default_value_t = 8192)]
+        spp: u32,
+        /// Re-render from scratch into a temporary folder and check the result against the
+        /// committed references, instead of replacing them.
+        #[arg(long)]
+        check: bool,
+    },
     /// Regenerate POV-Ray references (needs povray; see scripts/regen-povray.sh).
     RegenPovray {
         /// Only scenes whose name contains this.
@@ -79,10 +92,26 @@ fn run() -> Result<ExitCode> {
                 outcomes.push(check_povray(&e, &manifest).with_context(|| e.name.clone())?);
             }
             print!("{}", conformance::report::table(&outcomes));
+            let mut mi = Vec::new();
+            for e in scenes("mitsuba", &filter)? {
+                mi.push(
+                    conformance::mitsuba_harness::check_mitsuba(
+                        &e,
+                        &manifest,
+                        conformance::mitsuba_harness::GATE_SPP,
+                        None,
+                    )
+                    .with_context(|| e.name.clone())?,
+                );
+            }
+            if !mi.is_empty() {
+                print!("{}", conformance::report::mitsuba_table(&mi));
+            }
             let dir = root.join("target/conformance");
-            conformance::report::write(&dir, &outcomes)?;
+            conformance::report::write(&dir, &outcomes, &mi)?;
             println!("report: {}", dir.join("index.html").display());
-            let ok = outcomes.iter().all(|o| o.verdict == Verdict::Pass);
+            let ok = outcomes.iter().all(|o| o.verdict == Verdict::Pass)
+                && mi.iter().all(|o| o.verdict == Verdict::Pass);
             Ok(if ok {
                 ExitCode::SUCCESS
             } else {
@@ -111,6 +140,23 @@ fn run() -> Result<ExitCode> {
             e.write(&output)
                 .with_context(|| format!("writing {}", output.display()))?;
             Ok(ExitCode::SUCCESS)
+        }
+        Cmd::RegenMitsuba { filter, spp, check } => {
+            let entries = scenes("mitsuba", &filter)?;
+            anyhow::ensure!(!entries.is_empty(), "no catalog scene matches '{filter}'");
+            if check {
+                let bad = conformance::refgen::check_mitsuba_refs(&entries)?;
+                if bad.is_empty() {
+                    println!("{} Mitsuba reference(s) regenerated from scratch and consistent with the committed files", entries.len());
+                    Ok(ExitCode::SUCCESS)
+                } else {
+                    println!("regenerated Mitsuba references differ: {}", bad.join(", "));
+                    Ok(ExitCode::from(1))
+                }
+            } else {
+                conformance::refgen::regenerate_mitsuba(&entries, spp)?;
+                Ok(ExitCode::SUCCESS)
+            }
         }
         Cmd::RegenPovray { filter, check } => {
             let entries = scenes("povray", &filter)?;

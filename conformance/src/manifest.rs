@@ -25,6 +25,9 @@ pub struct Record {
     pub date: String,
     /// The image, relative to `references/`.
     pub file: String,
+    /// Samples per pixel of a Monte Carlo reference.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spp: Option<u32>,
 }
 
 /// All records, keyed by `<tool>/<scene>`.

@@ -367,7 +367,7 @@ impl Exporter<'_> {
                     world.m.determinant() > 0.0,
                     std::ptr::from_ref(tri.as_ref()) as usize,
                 );
-                self.obj(&name, &mirrored, &body);
+                self.obj(&name, &mirrored, &body, mesh.normals.is_none());
             }
             Shape::Mesh(mesh) => {
                 let name = self.mesh_file(
@@ -375,7 +375,7 @@ impl Exporter<'_> {
                     world.m.determinant() > 0.0,
                     std::sync::Arc::as_ptr(mesh) as usize,
                 );
-                self.obj(&name, &mirrored, &body);
+                self.obj(&name, &mirrored, &body, mesh.normals.is_none());
             }
             Shape::Cone { .. } => return Err(ExportError::Unsupported("the cone")),
             Shape::Plane => return Err(ExportError::Unsupported("the infinite plane")),
@@ -406,10 +406,10 @@ impl Exporter<'_> {
         .unwrap();
     }
 
-    fn obj(&mut self, file: &str, to_world: &Affine64, body: &str) {
+    fn obj(&mut self, file: &str, to_world: &Affine64, body: &str, flat: bool) {
         writeln!(
             self.body,
-            "  <shape type=\"obj\"><string name=\"filename\" value=\"{file}\"/><boolean name=\"face_normals\" value=\"true\"/><transform name=\"to_world\"><matrix value=\"{}\"/></transform>{body}</shape>",
+            "  <shape type=\"obj\"><string name=\"filename\" value=\"{file}\"/><boolean name=\"face_normals\" value=\"{flat}\"/><transform name=\"to_world\"><matrix value=\"{}\"/></transform>{body}</shape>",
             matrix(&affine4(to_world))
         )
         .unwrap();
@@ -450,7 +450,8 @@ fn keep_orientation(t: &Affine64) -> Affine64 {
     }
 }
 
-/// A mesh as OBJ text. Mitsuba computes face normals from the winding in its own
+/// A mesh as OBJ text, with its vertex normals when it has them (the renderer then shades
+/// with interpolated normals, and so does Mitsuba). Mitsuba computes face normals from the winding in its own
 /// right-handed world. The world mirror F flips that once more, so a mesh whose transform
 /// keeps orientation (det M > 0) is written with reversed winding. The renderer's outward
 /// normal `M⁻ᵀ·n` and Mitsuba's face normal then agree.

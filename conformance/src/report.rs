@@ -3,6 +3,7 @@
 
 use crate::compare::{diff_image, SILHOUETTE_BUDGET};
 use crate::harness::Outcome;
+use crate::mitsuba_harness::MiOutcome;
 use anyhow::Result;
 use renderer::output::{to_rgb8, ToneMap};
 use renderer::render::Image;
@@ -23,6 +24,7 @@ fn srgb(w: u32, h: u32, rgb: &[f32]) -> Vec<u8> {
         rgb: rgb.to_vec(),
         aov: None,
         non_finite: 0,
+        moments: None,
     };
     to_rgb8(&img, ToneMap::Srgb)
 }
@@ -71,8 +73,75 @@ pub fn table(outcomes: &[Outcome]) -> String {
     s
 }
 
+/// The text table of the Mitsuba comparisons.
+pub fn mitsuba_table(outcomes: &[MiOutcome]) -> String {
+    let mut s = format!(
+        "{:<24} {:>9} {:>8} {:>8} {:>9} {:>10} {:>9} {:>7}  verdict\n",
+        "scene (mitsuba)",
+        "rel dist",
+        "normal°",
+        "silh/bud",
+        "px pass",
+        "|global z|",
+        "rmse",
+        "ours s"
+    );
+    for o in outcomes {
+        match (&o.geometry, &o.radiance) {
+            (Some(g), Some(r)) => writeln!(
+                s,
+                "{:<24} {:>9.1e} {:>8.3} {:>8} {:>8.2}% {:>10.2} {:>9.2e} {:>7.2}  {}",
+                o.scene,
+                g.max_rel_distance,
+                g.max_normal_degrees,
+                format!("{}/{}", g.silhouette + g.failing, g.budget),
+                r.pass_fraction * 100.0,
+                r.global_z.iter().fold(0f64, |a, z| a.max(z.abs())),
+                r.rmse,
+                o.seconds,
+                o.verdict
+            ),
+            _ => writeln!(
+                s,
+                "{:<24} {:>66} {:>7.2}  {}",
+                o.scene, "-", o.seconds, o.verdict
+            ),
+        }
+        .unwrap();
+    }
+    let pass = outcomes
+        .iter()
+        .filter(|o| o.verdict == crate::harness::Verdict::Pass)
+        .count();
+    writeln!(
+        s,
+        "{} Mitsuba scenes: {pass} pass, {} not",
+        outcomes.len(),
+        outcomes.len() - pass
+    )
+    .unwrap();
+    s
+}
+
+/// A false-colour image of per-pixel z: black to white up to z = 2, orange up to the
+/// Šidák threshold, red beyond it.
+fn z_image(z: &[f64], alpha: f64) -> Vec<u8> {
+    let mut out = Vec::with_capacity(z.len() * 3);
+    for &v in z {
+        if crate::stats::p_value(v) <= alpha {
+            out.extend_from_slice(&[230, 0, 0]);
+        } else if v > 2.0 {
+            out.extend_from_slice(&[255, 160, 0]);
+        } else {
+            let g = (v / 2.0 * 200.0) as u8;
+            out.extend_from_slice(&[g, g, g]);
+        }
+    }
+    out
+}
+
 /// Writes images and `index.html` under `dir`.
-pub fn write(dir: &Path, outcomes: &[Outcome]) -> Result<()> {
+pub fn write(dir: &Path, outcomes: &[Outcome], mitsuba: &[MiOutcome]) -> Result<()> {
     std::fs::create_dir_all(dir)?;
     let mut html = String::from(
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>Conformance report</title><style>\
@@ -132,7 +201,70 @@ Failing pixels are red. See conformance/docs/tolerances.md.</p>",
             img("diff.png")
         )?;
     }
-    html.push_str("</table></body></html>\n");
+    html.push_str("</table>\n");
+    if !mitsuba.is_empty() {
+        html.push_str(
+            "<h2>Against Mitsuba 3</h2><p>Radiance: per-pixel two-sample z-test in XYZ with Šidák correction (≥ 99.75 % of pixel-channels must pass) \
+and a global test of the mean difference (|z| < 4.5). The z image shows per-pixel z: grey up to 2, orange above, red past the Šidák threshold. \
+Geometry: pixel-centre distance and normal against Mitsuba's ray_intersect. See conformance/docs/mitsuba.md.</p>\n\
+<table><tr><th>scene</th><th>ours</th><th>Mitsuba</th><th>z</th><th>metrics</th></tr>\n",
+        );
+        for o in mitsuba {
+            let sub = dir.join(&o.scene);
+            std::fs::create_dir_all(&sub)?;
+            let (w, h) = (o.ours.width, o.ours.height);
+            save_png(&sub.join("ours.png"), w, h, srgb(w, h, &o.ours.rgb))?;
+            let class = if o.verdict == crate::harness::Verdict::Pass {
+                "pass"
+            } else {
+                "fail"
+            };
+            let mut metrics = format!(
+                "<span class=\"{class}\">{}</span> against mitsuba",
+                o.verdict
+            );
+            if let (Some(r), Some(g), Some(rgb)) = (&o.radiance, &o.geometry, &o.reference_rgb) {
+                save_png(&sub.join("reference.png"), w, h, srgb(w, h, rgb))?;
+                let alpha = crate::stats::sidak_alpha((w * h) as usize);
+                save_png(&sub.join("z.png"), w, h, z_image(&r.z_max, alpha))?;
+                write!(
+                    metrics,
+                    "<br>pixel-channels passing {:.2} %<br>global z {:.2} {:.2} {:.2}<br>RMSE {:.2e}<br>distance error ≤ {:.1e}<br>normal ≤ {:.3}°<br>edge pixels {} (budget {})<br>ours {:.2} s",
+                    r.pass_fraction * 100.0,
+                    r.global_z[0],
+                    r.global_z[1],
+                    r.global_z[2],
+                    r.rmse,
+                    g.max_rel_distance,
+                    g.max_normal_degrees,
+                    g.silhouette + g.failing,
+                    g.budget,
+                    o.seconds
+                )?;
+            }
+            let img = |f: &str| {
+                if sub.join(f).exists() {
+                    format!("<img src=\"{}/{f}\" alt=\"{f}\">", o.scene)
+                } else {
+                    "—".into()
+                }
+            };
+            writeln!(
+                html,
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{metrics}</td></tr>",
+                o.scene,
+                img("ours.png"),
+                img("reference.png"),
+                img("z.png")
+            )?;
+        }
+        html.push_str("</table>\n");
+    }
+    if let Ok(svg) = std::fs::read_to_string(dir.join("tradeoff.svg")) {
+        html.push_str("<h2>Speed against accuracy</h2>\n");
+        html.push_str(&svg);
+    }
+    html.push_str("</body></html>\n");
     std::fs::write(dir.join("index.html"), html)?;
     Ok(())
 }

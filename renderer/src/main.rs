@@ -93,6 +93,7 @@ fn run() -> Result<()> {
                     aov,
                     progress: true,
                     spawn,
+                    ..Options::default()
                 },
             );
             let secs = t0.elapsed().as_secs_f64();

@@ -23,6 +23,13 @@ use crate::spawn::Spawn;
 use crate::transform::Transform;
 use std::f64::consts::PI;
 
+/// A deliberate error, injected only by tests that show the conformance gate catches it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fault {
+    /// Light sampling forgets the cosine at the shading point.
+    MissingCosine,
+}
+
 /// Light transport.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -264,6 +271,8 @@ pub struct PhysicalIntegrator<'a> {
     scene: &'a Scene,
     spawn: Spawn,
     env: Option<glam::DVec3>,
+    /// A deliberate fault (tests only).
+    pub fault: Option<Fault>,
 }
 
 impl<'a> PhysicalIntegrator<'a> {
@@ -275,7 +284,12 @@ impl<'a> PhysicalIntegrator<'a> {
             .filter(|l| l.kind == LightKind::Environment)
             .map(|l| rgb(l.color))
             .reduce(|a, b| a + b);
-        PhysicalIntegrator { scene, spawn, env }
+        PhysicalIntegrator {
+            scene,
+            spawn,
+            env,
+            fault: None,
+        }
     }
 
     fn surface(&self, hit: &Hit) -> Surface<'a> {
@@ -333,6 +347,25 @@ impl<'a> PhysicalIntegrator<'a> {
     /// Next-event estimation at a non-delta surface: every light once, area lights and the
     /// environment weighted by MIS against BSDF sampling.
     fn direct_light(&self, s: &Surface, wo: glam::DVec3, smp: &mut PixelSampler) -> glam::DVec3 {
+        let sum = self.direct_light_inner(s, wo, smp);
+        sum
+    }
+
+    fn eval_light(&self, s: &Surface, wo: glam::DVec3, wi: glam::DVec3) -> (glam::DVec3, f64) {
+        let (f, pdf) = s.eval_diffuse(wo, wi);
+        if self.fault == Some(Fault::MissingCosine) && pdf > 0.0 {
+            let cos = s.ns.dot(wi).abs();
+            return (f / cos, pdf);
+        }
+        (f, pdf)
+    }
+
+    fn direct_light_inner(
+        &self,
+        s: &Surface,
+        wo: glam::DVec3,
+        smp: &mut PixelSampler,
+    ) -> glam::DVec3 {
         let mut sum = glam::DVec3::ZERO;
         let p = dv(s.p);
         for light in &self.scene.lights {
@@ -342,14 +375,14 @@ impl<'a> PhysicalIntegrator<'a> {
                     let d2 = to.length_squared();
                     let dist = d2.sqrt();
                     let wi = to / dist;
-                    let (f, _) = s.eval_diffuse(wo, wi);
+                    let (f, _) = self.eval_light(s, wo, wi);
                     if f != glam::DVec3::ZERO && !self.occluded(s, wi, dist) {
                         sum += f * rgb(light.color) / d2;
                     }
                 }
                 LightKind::Directional => {
                     let wi = -dv(light.direction);
-                    let (f, _) = s.eval_diffuse(wo, wi);
+                    let (f, _) = self.eval_light(s, wo, wi);
                     if f != glam::DVec3::ZERO && !self.occluded(s, wi, f64::INFINITY) {
                         sum += f * rgb(light.color);
                     }
@@ -362,7 +395,7 @@ impl<'a> PhysicalIntegrator<'a> {
                     let phi = 2.0 * PI * u2;
                     let wi = glam::DVec3::new(r * phi.cos(), r * phi.sin(), z);
                     let pdf_l = 1.0 / (4.0 * PI);
-                    let (f, pdf_b) = s.eval_diffuse(wo, wi);
+                    let (f, pdf_b) = self.eval_light(s, wo, wi);
                     if f != glam::DVec3::ZERO && !self.occluded(s, wi, f64::INFINITY) {
                         sum += f * rgb(light.color) * (mis(pdf_l, pdf_b) / pdf_l);
                     }
@@ -381,7 +414,7 @@ impl<'a> PhysicalIntegrator<'a> {
                 continue; // The back of the light does not emit.
             }
             let pdf_l = light.pdf_area(n_world) as f64 * d2 / cos_l;
-            let (f, pdf_b) = s.eval_diffuse(wo, wi);
+            let (f, pdf_b) = self.eval_light(s, wo, wi);
             if f == glam::DVec3::ZERO || !pdf_l.is_finite() {
                 continue;
             }

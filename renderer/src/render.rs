@@ -35,6 +35,10 @@ pub struct Image {
     pub aov: Option<Aov>,
     /// Pixel channels that came out NaN or infinite and were written as 0.
     pub non_finite: usize,
+    /// Per-pixel second moments of the samples, when requested: E[R²], E[G²], E[B²],
+    /// E[RG], E[RB], E[GB] (6 per pixel). With the mean they give the variance of any linear
+    /// function of RGB (for example XYZ), for statistical tests against references.
+    pub moments: Option<Vec<f32>>,
 }
 
 /// Render options that are not part of the scene.
@@ -48,6 +52,12 @@ pub struct Options {
     pub progress: bool,
     /// Self-intersection strategy.
     pub spawn: Spawn,
+    /// Samples per pixel, overriding the scene's `render.samples`.
+    pub samples: Option<u32>,
+    /// Also record per-pixel second moments ([`Image::moments`]).
+    pub moments: bool,
+    /// A deliberate fault, for tests that show the conformance gate catches it.
+    pub fault: Option<crate::physical::Fault>,
 }
 
 /// Renders `scene`.
@@ -69,27 +79,36 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
         scene.settings.width as usize,
         scene.settings.height as usize,
     );
-    let spp = scene.settings.samples;
+    let spp = opts.samples.unwrap_or(scene.settings.samples).max(1);
     let shader = Shader::new(scene, opts.spawn);
-    let physical = PhysicalIntegrator::new(scene, opts.spawn);
+    let mut physical = PhysicalIntegrator::new(scene, opts.spawn);
+    physical.fault = opts.fault;
     let classic = scene.settings.integrator == Integrator::Classic;
     let kind = scene.settings.sampler;
     let bar = progress_bar(h as u64, opts.progress);
     let mut rgb = vec![0f32; w * h * 3];
+    let mut moments = opts.moments.then(|| vec![0f32; w * h * 6]);
     let mut aov = opts.aov.then(|| Aov {
         z: vec![0.0; w * h],
         n: vec![0.0; w * h * 3],
         p: vec![0.0; w * h * 3],
         object_id: vec![0.0; w * h],
     });
+    // One moments row per image row; empty rows when moments are off.
+    let moment_rows: Vec<&mut [f32]> = match moments.as_mut() {
+        Some(m) => m.chunks_mut(w * 6).collect(),
+        None => (0..h).map(|_| -> &mut [f32] { &mut [] }).collect(),
+    };
     let non_finite: usize = rgb
         .par_chunks_mut(w * 3)
+        .zip(moment_rows)
         .enumerate()
-        .map(|(j, row)| {
+        .map(|(j, (row, mrow))| {
             let mut bad = 0;
             for i in 0..w {
                 let pixel = (j * w + i) as u64;
                 let mut sum = Color::ZERO;
+                let mut sq = [0f64; 6];
                 for s in 0..spp {
                     let mut smp = PixelSampler::new(kind, pixel, s, spp);
                     // The classic model samples the pixel centre at 1 spp, as POV-Ray does
@@ -101,11 +120,27 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
                         smp.next_2d()
                     };
                     let ray = scene.camera.ray_at(i as f64 + dx, j as f64 + dy);
-                    sum += if classic {
+                    let c = if classic {
                         shader.trace_primary(&ray)
                     } else {
                         physical.li(&ray, &mut smp)
                     };
+                    sum += c;
+                    if !mrow.is_empty() {
+                        let (r, g, b) = (c.x as f64, c.y as f64, c.z as f64);
+                        for (k, v) in [r * r, g * g, b * b, r * g, r * b, g * b]
+                            .into_iter()
+                            .enumerate()
+                        {
+                            sq[k] += v;
+                        }
+                    }
+                }
+                if !mrow.is_empty() {
+                    for k in 0..6 {
+                        let v = (sq[k] / spp as f64) as f32;
+                        mrow[6 * i + k] = if v.is_finite() { v } else { 0.0 };
+                    }
                 }
                 let c = sum / spp as f32;
                 for k in 0..3 {
@@ -136,6 +171,7 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
         rgb,
         aov,
         non_finite,
+        moments,
     }
 }
 

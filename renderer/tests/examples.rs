@@ -167,6 +167,7 @@ fn test05_srgb_mapping() {
         rgb: vec![0.0, 0.5, 2.0, -1.0, 0.25, 1.0],
         aov: None,
         non_finite: 0,
+        moments: None,
     };
     assert_eq!(
         output::to_rgb8(&img, ToneMap::Clamp),

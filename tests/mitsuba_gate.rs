@@ -1,0 +1,164 @@
+//! The gate against Mitsuba 3: geometry agrees with Mitsuba's pixel-centre ray casts, and
+//! radiance passes the statistical test against the `moment` references. The test is tight
+//! enough to catch a light 2 % too bright and a missing cosine term.
+
+use conformance::catalog::{repo_root, scenes, Entry};
+use conformance::harness::{load, Verdict};
+use conformance::manifest::Manifest;
+use conformance::mitsuba_harness::{check_mitsuba, read_radiance, render_estimate, GATE_SPP};
+use conformance::stats::{radiance_test, Estimate, RadianceTest};
+use renderer::physical::Fault;
+use renderer::scene::Scene;
+
+fn manifest() -> Manifest {
+    Manifest::load(&repo_root().join("references/manifest.toml")).unwrap()
+}
+
+fn entry(name: &str) -> Entry {
+    scenes("mitsuba", name)
+        .unwrap()
+        .into_iter()
+        .find(|e| e.name == name)
+        .unwrap()
+}
+
+/// Renders a (modified) scene and runs the statistical test against the named reference.
+fn against_reference(scene: &Scene, name: &str, fault: Option<Fault>) -> RadianceTest {
+    let m = manifest();
+    let rec = &m.reference[&format!("mitsuba/{name}")];
+    let (_, reference) = read_radiance(
+        &repo_root().join("references").join(&rec.file),
+        rec.spp.unwrap(),
+    )
+    .unwrap();
+    let img = render_estimate(scene, GATE_SPP, fault);
+    let est = Estimate::from_rgb_moments(
+        (img.width as usize, img.height as usize),
+        &img.rgb,
+        img.moments.as_ref().unwrap(),
+        GATE_SPP,
+    );
+    radiance_test(&est, &reference)
+}
+
+#[test]
+fn test01_every_mitsuba_scene_passes() {
+    let m = manifest();
+    let all = scenes("mitsuba", "").unwrap();
+    let mut bad = Vec::new();
+    for e in &all {
+        let o = check_mitsuba(e, &m, GATE_SPP, None).unwrap();
+        if let (Some(g), Some(r)) = (&o.geometry, &o.radiance) {
+            eprintln!(
+                "{:<24} geometry: rel dist {:.1e}, normal {:.3}°, edge px {}/{}; radiance: {:.2} % pass, global z {:.2?}",
+                e.name,
+                g.max_rel_distance,
+                g.max_normal_degrees,
+                g.silhouette + g.failing,
+                g.budget,
+                r.pass_fraction * 100.0,
+                r.global_z
+            );
+        }
+        if o.verdict != Verdict::Pass {
+            bad.push(format!("{}: {}", e.name, o.verdict));
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "{} of {} Mitsuba scenes do not pass:\n{}",
+        bad.len(),
+        all.len(),
+        bad.join("\n")
+    );
+}
+
+#[test]
+fn test02_catalog_covers_the_required_scenes() {
+    let names: Vec<String> = scenes("mitsuba", "")
+        .unwrap()
+        .into_iter()
+        .map(|e| e.name)
+        .collect();
+    assert!(names.len() >= 12, "{} scenes", names.len());
+    for n in [
+        "mi_diffuse_point",
+        "mi_directional",
+        "mi_area_soft_shadow",
+        "mi_mirror_sphere",
+        "mi_glass_sphere",
+        "mi_cornell",
+        "mi_transformed",
+        "mi_ellipsoid",
+        "mi_mirrored",
+    ] {
+        assert!(names.iter().any(|x| x == n), "{n} is missing");
+    }
+}
+
+#[test]
+fn test03_a_stale_mitsuba_reference_is_never_a_pass() {
+    let e = entry("mi_directional");
+    let text = std::fs::read_to_string(&e.path)
+        .unwrap()
+        .replace("[render]", "# edited\n[render]");
+    let dir = std::env::temp_dir().join(format!("gate-mi-stale-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("mi_directional.toml");
+    std::fs::write(&path, text).unwrap();
+    let o = check_mitsuba(
+        &Entry {
+            name: e.name.clone(),
+            path,
+        },
+        &manifest(),
+        64,
+        None,
+    )
+    .unwrap();
+    assert_eq!(o.verdict, Verdict::Stale);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn test04_a_light_two_percent_brighter_fails() {
+    // A point light, a directional light, and an area light (its material's radiance).
+    for name in ["mi_diffuse_point", "mi_directional", "mi_area_soft_shadow"] {
+        let (mut s, _) = load(&entry(name)).unwrap();
+        assert!(
+            against_reference(&s, name, None).passed(),
+            "{name} passes unmodified"
+        );
+        if s.lights.is_empty() {
+            for m in s.materials.iter_mut() {
+                m.radiance *= 1.02;
+            }
+            for l in s.area_lights.iter_mut() {
+                l.radiance *= 1.02;
+            }
+        } else {
+            s.lights[0].color *= 1.02;
+        }
+        let r = against_reference(&s, name, None);
+        eprintln!(
+            "2 % brighter, {name}: {:.2} % pass, global z {:.1?}",
+            r.pass_fraction * 100.0,
+            r.global_z
+        );
+        assert!(!r.passed(), "{name}: a 2 % brighter light passed");
+    }
+}
+
+#[test]
+fn test05_a_missing_cosine_term_fails() {
+    for name in ["mi_diffuse_point", "mi_directional", "mi_cornell"] {
+        let (s, _) = load(&entry(name)).unwrap();
+        let r = against_reference(&s, name, Some(Fault::MissingCosine));
+        eprintln!(
+            "missing cosine, {name}: {:.2} % pass, global z {:.1?}",
+            r.pass_fraction * 100.0,
+            r.global_z
+        );
+        assert!(!r.passed(), "{name}: a missing cosine passed");
+    }
+}
