@@ -210,7 +210,8 @@ pub struct GeometryTest {
     pub max_rel_distance: f64,
     /// Largest normal angle (degrees) over pixels both hit.
     pub max_normal_degrees: f64,
-    /// Pixels outside tolerance that match a neighbouring reference pixel.
+    /// Pixels outside tolerance whose surface (hit and normal) a neighbouring reference
+    /// pixel hit: the ray fell on the other side of an edge.
     pub silhouette: usize,
     /// Other pixels outside tolerance.
     pub failing: usize,
@@ -223,6 +224,22 @@ impl GeometryTest {
     pub fn passed(&self) -> bool {
         self.failing == 0 && self.silhouette <= self.budget
     }
+}
+
+/// Whether pixel `i` of `a` hit the same surface as pixel `j` of `b`: both miss, or both
+/// hit with normals within tolerance (distances differ from pixel to pixel).
+fn same_surface(a: &Geometry, i: usize, b: &Geometry, j: usize) -> bool {
+    if a.hit[i] != b.hit[j] {
+        return false;
+    }
+    !a.hit[i]
+        || (0..3)
+            .map(|c| a.n[3 * i + c] * b.n[3 * j + c])
+            .sum::<f64>()
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees()
+            <= GEOMETRY_NORMAL_DEGREES
 }
 
 fn agrees(a: &Geometry, i: usize, b: &Geometry, j: usize) -> (bool, f64, f64) {
