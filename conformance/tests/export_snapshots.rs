@@ -52,3 +52,52 @@ fn test06_mesh2() {
     );
     insta::assert_snapshot!(s);
 }
+
+fn xml(name: &str) -> String {
+    let e = scenes("mitsuba", name).unwrap().into_iter().find(|e| e.name == name).unwrap();
+    let (scene, _) = load(&e).unwrap();
+    let export = conformance::mitsuba::export(&scene, 64, true).unwrap();
+    let mut s = export.xml;
+    for (file, obj) in export.meshes {
+        s.push_str(&format!("\n=== {file} (first 6 lines) ===\n"));
+        for line in obj.lines().take(6) {
+            s.push_str(line);
+            s.push('\n');
+        }
+    }
+    s
+}
+
+#[test]
+fn test07_mitsuba_point_light_and_spheres() {
+    insta::assert_snapshot!(xml("mi_diffuse_point"));
+}
+
+#[test]
+fn test08_mitsuba_shapegroup_for_an_ellipsoid() {
+    let s = xml("mi_ellipsoid");
+    assert!(s.contains("type=\"shapegroup\"") && s.contains("type=\"instance\""));
+    insta::assert_snapshot!(s);
+}
+
+#[test]
+fn test09_mitsuba_mirrored_and_meshes() {
+    insta::assert_snapshot!(xml("mi_mirrored"));
+    insta::assert_snapshot!(xml("mi_mesh"));
+}
+
+#[test]
+fn test10_mitsuba_area_lights_and_path() {
+    let s = xml("mi_cornell");
+    assert!(s.contains("<emitter type=\"area\">") && s.contains("<integrator type=\"path\">"));
+    insta::assert_snapshot!(s);
+}
+
+#[test]
+fn test11_mitsuba_refuses_what_it_cannot_express() {
+    // Non-square pixels, cones and classic materials have no Mitsuba equivalent.
+    let e = scenes("povray", "cam_nonsquare").unwrap().remove(0);
+    let (scene, _) = load(&e).unwrap();
+    let err = conformance::mitsuba::export(&scene, 1, false).err().unwrap().to_string();
+    assert!(err.contains("not square"), "{err}");
+}
