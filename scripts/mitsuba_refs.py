@@ -10,6 +10,9 @@ on these machines).
     mitsuba_refs.py radiance SCENE.xml OUT.exr SPP
         mi.render through the `moment` integrator the scene was exported with. The EXR has
         R, G, B (mean), then per-pixel XYZ first and second moments (_arg_0.* and m2__arg_0.*).
+    mitsuba_refs.py time SCENE.xml OUT.exr SPP
+        Renders the scene as exported (no moment integrator) and prints the seconds that
+        mi.render took (scene loading excluded).
     mitsuba_refs.py version
 """
 import sys
@@ -45,12 +48,25 @@ def radiance(xml, out, spp):
     scene.sensors()[0].film().bitmap(raw=False).write(out)
 
 
+def timed(xml, out, spp):
+    import time
+
+    scene = mi.load_file(xml)
+    t0 = time.perf_counter()
+    image = mi.render(scene, spp=spp, seed=0)
+    seconds = time.perf_counter() - t0
+    mi.Bitmap(image).write(out)
+    print(f"{seconds:.6f}")
+
+
 if __name__ == "__main__":
     cmd = sys.argv[1] if len(sys.argv) > 1 else ""
     if cmd == "geometry":
         geometry(sys.argv[2], sys.argv[3])
     elif cmd == "radiance":
         radiance(sys.argv[2], sys.argv[3], int(sys.argv[4]))
+    elif cmd == "time":
+        timed(sys.argv[2], sys.argv[3], int(sys.argv[4]))
     elif cmd == "version":
         print(mi.__version__)
     else:

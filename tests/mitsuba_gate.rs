@@ -50,7 +50,7 @@ fn test01_every_mitsuba_scene_passes() {
         let o = check_mitsuba(e, &m, GATE_SPP, None).unwrap();
         if let (Some(g), Some(r)) = (&o.geometry, &o.radiance) {
             eprintln!(
-                "{:<24} geometry: rel dist {:.1e}, normal {:.3}°, edge px {}/{}; radiance: {:.2} % pass, global z {:.2?}",
+                "{:<24} geometry: rel dist {:.1e}, normal {:.4}°, edge px {}/{}; radiance: {:.2} % pass, global z {:.2?}",
                 e.name,
                 g.max_rel_distance,
                 g.max_normal_degrees,
@@ -160,5 +160,36 @@ fn test05_a_missing_cosine_term_fails() {
             r.global_z
         );
         assert!(!r.passed(), "{name}: a missing cosine passed");
+    }
+}
+
+#[test]
+fn test06_geometry_catches_a_half_pixel_shift() {
+    use conformance::mitsuba_harness::{our_geometry, read_geometry};
+    use conformance::stats::geometry_test;
+    for name in ["mi_transformed", "mi_cornell"] {
+        let m = manifest();
+        let reference = read_geometry(
+            &repo_root()
+                .join("references")
+                .join(&m.reference[&format!("mitsuba-geometry/{name}")].file),
+        )
+        .unwrap();
+        let (mut s, _) = load(&entry(name)).unwrap();
+        assert!(geometry_test(&our_geometry(&render_estimate(&s, 1, None)), &reference).passed());
+        let mut v = s.camera.model;
+        let half = 0.5 * (v.window.right - v.window.left) / v.cols as f64;
+        v.window.left += half;
+        v.window.right += half;
+        s.camera = renderer::camera::Camera::new(v).unwrap();
+        let g = geometry_test(&our_geometry(&render_estimate(&s, 1, None)), &reference);
+        eprintln!(
+            "half-pixel shift, {name}: {} failing, {} edge (budget {}), max rel distance {:.1e}",
+            g.failing, g.silhouette, g.budget, g.max_rel_distance
+        );
+        assert!(
+            !g.passed(),
+            "{name}: a half-pixel shift passed the geometry test"
+        );
     }
 }

@@ -90,7 +90,7 @@ pub fn mitsuba_table(outcomes: &[MiOutcome]) -> String {
         match (&o.geometry, &o.radiance) {
             (Some(g), Some(r)) => writeln!(
                 s,
-                "{:<24} {:>9.1e} {:>8.3} {:>8} {:>8.2}% {:>10.2} {:>9.2e} {:>7.2}  {}",
+                "{:<24} {:>9.1e} {:>8.4} {:>8} {:>8.2}% {:>10.2} {:>9.2e} {:>7.2}  {}",
                 o.scene,
                 g.max_rel_distance,
                 g.max_normal_degrees,
@@ -229,7 +229,7 @@ Geometry: pixel-centre distance and normal against Mitsuba's ray_intersect. See 
                 save_png(&sub.join("z.png"), w, h, z_image(&r.z_max, alpha))?;
                 write!(
                     metrics,
-                    "<br>pixel-channels passing {:.2} %<br>global z {:.2} {:.2} {:.2}<br>RMSE {:.2e}<br>distance error ≤ {:.1e}<br>normal ≤ {:.3}°<br>edge pixels {} (budget {})<br>ours {:.2} s",
+                    "<br>pixel-channels passing {:.2} %<br>global z {:.2} {:.2} {:.2}<br>RMSE {:.2e}<br>distance error ≤ {:.1e}<br>normal ≤ {:.4}°<br>edge pixels {} (budget {})<br>ours {:.2} s",
                     r.pass_fraction * 100.0,
                     r.global_z[0],
                     r.global_z[1],
@@ -260,7 +260,9 @@ Geometry: pixel-centre distance and normal against Mitsuba's ray_intersect. See 
         }
         html.push_str("</table>\n");
     }
-    if let Ok(svg) = std::fs::read_to_string(dir.join("tradeoff.svg")) {
+    if let Ok(svg) =
+        std::fs::read_to_string(crate::catalog::repo_root().join("conformance/docs/tradeoff.svg"))
+    {
         html.push_str("<h2>Speed against accuracy</h2>\n");
         html.push_str(&svg);
     }

@@ -188,7 +188,7 @@ pub fn radiance_test(a: &Estimate, b: &Estimate) -> RadianceTest {
 /// Tolerances of the geometric comparison (both renderers intersect in f32).
 pub const GEOMETRY_REL_DISTANCE: f64 = 2e-5;
 /// Largest angle between normals, in degrees.
-pub const GEOMETRY_NORMAL_DEGREES: f64 = 0.05;
+pub const GEOMETRY_NORMAL_DEGREES: f64 = 0.01;
 
 /// Geometry channels of one image: distance from the eye, unit normal, hit mask.
 #[derive(Clone, Debug)]
@@ -226,20 +226,22 @@ impl GeometryTest {
     }
 }
 
+/// The angle in degrees between normal `i` of `a` and normal `j` of `b`, computed as
+/// `atan2(|a×b|, a·b)`. (`acos(a·b)` is ill-conditioned near 0: two f32-stored unit
+/// normals 4e-7 rad apart read as 0.02° through it.)
+fn angle(a: &Geometry, i: usize, b: &Geometry, j: usize) -> f64 {
+    let u = glam::DVec3::new(a.n[3 * i], a.n[3 * i + 1], a.n[3 * i + 2]);
+    let v = glam::DVec3::new(b.n[3 * j], b.n[3 * j + 1], b.n[3 * j + 2]);
+    u.cross(v).length().atan2(u.dot(v)).to_degrees()
+}
+
 /// Whether pixel `i` of `a` hit the same surface as pixel `j` of `b`: both miss, or both
 /// hit with normals within tolerance (distances differ from pixel to pixel).
 fn same_surface(a: &Geometry, i: usize, b: &Geometry, j: usize) -> bool {
     if a.hit[i] != b.hit[j] {
         return false;
     }
-    !a.hit[i]
-        || (0..3)
-            .map(|c| a.n[3 * i + c] * b.n[3 * j + c])
-            .sum::<f64>()
-            .clamp(-1.0, 1.0)
-            .acos()
-            .to_degrees()
-            <= GEOMETRY_NORMAL_DEGREES
+    !a.hit[i] || angle(a, i, b, j) <= GEOMETRY_NORMAL_DEGREES
 }
 
 fn agrees(a: &Geometry, i: usize, b: &Geometry, j: usize) -> (bool, f64, f64) {
@@ -250,11 +252,7 @@ fn agrees(a: &Geometry, i: usize, b: &Geometry, j: usize) -> (bool, f64, f64) {
         return (true, 0.0, 0.0);
     }
     let rel = (a.z[i] - b.z[j]).abs() / b.z[j].max(1e-30);
-    let dot = (0..3)
-        .map(|c| a.n[3 * i + c] * b.n[3 * j + c])
-        .sum::<f64>()
-        .clamp(-1.0, 1.0);
-    let deg = dot.acos().to_degrees();
+    let deg = angle(a, i, b, j);
     (
         rel <= GEOMETRY_REL_DISTANCE && deg <= GEOMETRY_NORMAL_DEGREES,
         rel,
@@ -275,8 +273,11 @@ pub fn geometry_test(a: &Geometry, b: &Geometry) -> GeometryTest {
                 max_deg = max_deg.max(deg);
                 continue;
             }
+            // An edge pixel: its ray fell on the other side of an edge, onto a surface that
+            // a neighbouring reference ray hit.
             let near = (y.saturating_sub(1)..(y + 2).min(h)).any(|yy| {
-                (x.saturating_sub(1)..(x + 2).min(w)).any(|xx| agrees(a, i, b, yy * w + xx).0)
+                (x.saturating_sub(1)..(x + 2).min(w))
+                    .any(|xx| (yy, xx) != (y, x) && same_surface(a, i, b, yy * w + xx))
             });
             if near {
                 silhouette += 1;

@@ -54,7 +54,11 @@ fn test06_mesh2() {
 }
 
 fn xml(name: &str) -> String {
-    let e = scenes("mitsuba", name).unwrap().into_iter().find(|e| e.name == name).unwrap();
+    let e = scenes("mitsuba", name)
+        .unwrap()
+        .into_iter()
+        .find(|e| e.name == name)
+        .unwrap();
     let (scene, _) = load(&e).unwrap();
     let export = conformance::mitsuba::export(&scene, 64, true).unwrap();
     let mut s = export.xml;
@@ -98,6 +102,9 @@ fn test11_mitsuba_refuses_what_it_cannot_express() {
     // Non-square pixels, cones and classic materials have no Mitsuba equivalent.
     let e = scenes("povray", "cam_nonsquare").unwrap().remove(0);
     let (scene, _) = load(&e).unwrap();
-    let err = conformance::mitsuba::export(&scene, 1, false).err().unwrap().to_string();
+    let err = conformance::mitsuba::export(&scene, 1, false)
+        .err()
+        .unwrap()
+        .to_string();
     assert!(err.contains("not square"), "{err}");
 }
