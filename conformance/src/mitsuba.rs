@@ -261,7 +261,7 @@ impl Exporter<'_> {
         outer: &Affine64,
         inherited: Option<u32>,
     ) -> Result<(), ExportError> {
-        for inst in &agg.instances {
+        for inst in agg.in_scene_order() {
             self.instance(inst, outer, inherited)?;
         }
         Ok(())
@@ -273,10 +273,12 @@ impl Exporter<'_> {
         outer: &Affine64,
         inherited: Option<u32>,
     ) -> Result<(), ExportError> {
+        // Inputs rounded to f32 first, so that the f32 and f64 builds compose them with the
+        // same f64 arithmetic and export the same text (and references stay shared).
         let local = match &inst.xf {
             Some(x) => Affine64 {
-                m: DMat3::from_cols_array(&x.matrix().to_cols_array().map(|v| v as f64)),
-                d: dvec3(x.translation()),
+                m: DMat3::from_cols_array(&x.matrix().to_cols_array().map(|v| v as f32 as f64)),
+                d: dvec3(x.translation()).as_vec3().as_dvec3(),
             },
             None => Affine64::IDENTITY,
         };

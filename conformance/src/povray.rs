@@ -174,7 +174,7 @@ impl Exporter<'_> {
     /// material; inside a definition only objects with their own material do.
     fn aggregate_body(&mut self, agg: &Aggregate, top: bool) -> String {
         let mut s = String::new();
-        for inst in &agg.instances {
+        for inst in agg.in_scene_order() {
             let line = self.instance(inst, top);
             s.push_str(&line);
             s.push('\n');

@@ -118,24 +118,40 @@ pub struct Aggregate {
     /// Number of bounded instances (the BVH's primitives are `instances[..bounded]`).
     bounded: usize,
     bvh: Bvh,
+    /// For each instance in the order given to [`Aggregate::new`], its index in `instances`.
+    scene_order: Vec<u32>,
 }
 
 impl Aggregate {
     /// Builds the BVH over the bounded instances and stores them in leaf order.
     pub fn new(instances: Vec<Instance>) -> Self {
-        let (bounded, unbounded): (Vec<Instance>, Vec<Instance>) = instances
+        let (bounded, unbounded): (Vec<(usize, Instance)>, Vec<(usize, Instance)>) = instances
             .into_iter()
-            .partition(|inst| inst.bounds().is_finite());
-        let boxes: Vec<Aabb> = bounded.iter().map(Instance::bounds).collect();
+            .enumerate()
+            .partition(|(_, inst)| inst.bounds().is_finite());
+        let boxes: Vec<Aabb> = bounded.iter().map(|(_, i)| i.bounds()).collect();
         let mut bvh = Bvh::build(&boxes);
-        let mut instances = bvh.reorder(bounded);
-        let bounded = instances.len();
-        instances.extend(unbounded);
+        let mut tagged = bvh.reorder(bounded);
+        let bounded = tagged.len();
+        tagged.extend(unbounded);
+        let mut scene_order = vec![0u32; tagged.len()];
+        for (k, (original, _)) in tagged.iter().enumerate() {
+            scene_order[*original] = k as u32;
+        }
         Aggregate {
-            instances,
+            instances: tagged.into_iter().map(|(_, i)| i).collect(),
             bounded,
             bvh,
+            scene_order,
         }
+    }
+
+    /// The instances in the order they were given (scene order), independent of how the
+    /// BVH was built: exporters use it, so that the f32 and f64 builds write the same text.
+    pub fn in_scene_order(&self) -> impl Iterator<Item = &Instance> {
+        self.scene_order
+            .iter()
+            .map(|&k| &self.instances[k as usize])
     }
 
     fn unbounded(&self) -> &[Instance] {

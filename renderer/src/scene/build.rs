@@ -244,7 +244,7 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
     let root = Aggregate::new(instances);
     let mut area_lights = Vec::new();
     let mut area_light_of = vec![u32::MAX; objects.len() + 1];
-    for inst in &root.instances {
+    for inst in root.in_scene_order() {
         if materials[inst.material as usize].radiance != Color::ZERO {
             area_light_of[inst.object_id as usize] = area_lights.len() as u32;
             area_lights.push(AreaLight::new(

@@ -21,11 +21,24 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
     let b = o.x * d.x + o.z * d.z - K2 * ow * dw;
     let c = o.x * o.x + o.z * o.z - K2 * ow * ow;
     let mut roots = [Real::NAN; 2];
+    // Which t lie inside the double cone x² + z² ≤ k²(1 − y)²: [lo, hi], or outside (lo, hi)
+    // when the flag is set. The base cap is hit only inside, and a side root counts only
+    // inside the slab −1 ≤ y ≤ 1 (whose ends are computed exactly as the cap's t): the
+    // same computed values decide both, so a ray entering at the base rim cannot slip
+    // between the cap and the side (as in the cylinder).
+    let mut inside = (Real::INFINITY, Real::NEG_INFINITY, false);
     let scale = d.length_squared();
     if a.abs() <= scale * Real::EPSILON {
         // The ray is parallel to a generator line: one root.
         if b != 0.0 {
             roots[0] = -c / (2.0 * b);
+            inside = if b > 0.0 {
+                (Real::NEG_INFINITY, roots[0], false)
+            } else {
+                (roots[0], Real::INFINITY, false)
+            };
+        } else if c <= 0.0 {
+            inside = (Real::NEG_INFINITY, Real::INFINITY, false);
         }
     } else {
         // b² − a·c cancels catastrophically when the roots are close relative to the
@@ -45,22 +58,37 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
             if roots[0] > roots[1] {
                 roots.swap(0, 1);
             }
+            inside = (roots[0], roots[1], a < 0.0);
+        } else if a < 0.0 {
+            // The whole line is inside the double cone: it passes through the apex, where
+            // rounding lost the double root (see the apex below).
+            inside = (Real::NEG_INFINITY, Real::INFINITY, false);
         }
     }
+    let in_cone = |t: Real| {
+        let (lo, hi, outside) = inside;
+        if outside {
+            t <= lo || t >= hi
+        } else {
+            lo <= t && t <= hi
+        }
+    };
+    let (ty0, ty1) = super::cylinder::slab(o.y, d.y);
     for t in roots {
-        if t > t_min && t < t_max {
+        if t > t_min && t < t_max && ty0 <= t && t <= ty1 {
             let (t, p) = refine(ray, t);
-            if (-1.0..=1.0).contains(&p.y) && t > t_min && t < t_max {
+            if t > t_min && t < t_max {
                 // Re-project radially onto r = ½(1 − y), as the cylinder does: near a
                 // double root (or far from the cone) one Newton step can leave p off the
                 // surface by much more than `err`; the re-projected point is on it up to
                 // the rounding of these few operations, well within γ(8).
+                let y = p.y.clamp(-1.0, 1.0);
                 let r = (p.x * p.x + p.z * p.z).sqrt();
                 let p = if r > 0.0 {
-                    let s = 0.5 * (1.0 - p.y) / r;
-                    Vec3::new(p.x * s, p.y, p.z * s)
+                    let s = 0.5 * (1.0 - y) / r;
+                    Vec3::new(p.x * s, y, p.z * s)
                 } else {
-                    p
+                    Vec3::new(p.x, y, p.z)
                 };
                 let mut n = Vec3::new(p.x, K2 * (1.0 - p.y), p.z);
                 if n == Vec3::ZERO {
@@ -75,21 +103,31 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
             }
         }
     }
+    // The apex, as the solid's degenerate face y = 1: a ray that crosses that plane inside
+    // the double cone passes through the apex. There the two roots are nearly double, and
+    // rounding loses them or moves them past y = 1: half of the rays aimed exactly at the
+    // apex from inside the solid's tangent cone missed in f32 without this.
+    if d.y != 0.0 {
+        let t = (1.0 - o.y) / d.y;
+        if t > t_min && t < t_max && in_cone(t) {
+            let err = (Vec3::Y + Vec3::ONE) * gamma(8);
+            best = Some(local_hit(t, Vec3::Y, err, Vec3::Y, Vec2::new(0.0, 1.0)));
+            t_max = t;
+        }
+    }
     if capped && d.y != 0.0 {
         let t = (-1.0 - o.y) / d.y;
-        if t > t_min && t < t_max {
+        if t > t_min && t < t_max && in_cone(t) {
             let mut p = ray.at(t);
-            if p.x * p.x + p.z * p.z <= 1.0 {
-                p.y = -1.0;
-                let err = Vec3::new(p.x.abs(), 0.0, p.z.abs()) * gamma(4);
-                best = Some(local_hit(
-                    t,
-                    p,
-                    err,
-                    -Vec3::Y,
-                    Vec2::new((p.x + 1.0) * 0.5, (p.z + 1.0) * 0.5),
-                ));
-            }
+            p.y = -1.0;
+            let err = Vec3::new(p.x.abs(), 0.0, p.z.abs()) * gamma(4);
+            best = Some(local_hit(
+                t,
+                p,
+                err,
+                -Vec3::Y,
+                Vec2::new((p.x + 1.0) * 0.5, (p.z + 1.0) * 0.5),
+            ));
         }
     }
     best
@@ -106,7 +144,15 @@ fn refine(ray: &Ray, t: Real) -> (Real, Vec3) {
     if df != 0.0 && df.is_finite() {
         let t2 = t - f / df;
         if t2.is_finite() {
-            return (t2, ray.at(t2));
+            // Keep the step only if it reduces the residual. At a tangent ray the root is
+            // double and F' vanishes there, so the step can jump far along the ray (and the
+            // radial re-projection then put the hit on the cone far from the ray).
+            let p2 = ray.at(t2);
+            let w2 = 1.0 - p2.y;
+            let f2 = p2.x * p2.x + p2.z * p2.z - K2 * w2 * w2;
+            if f2.abs() < f.abs() {
+                return (t2, p2);
+            }
         }
     }
     (t, p)
