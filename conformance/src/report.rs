@@ -140,6 +140,26 @@ fn z_image(z: &[f64], alpha: f64) -> Vec<u8> {
     out
 }
 
+/// One table row: the scene, our image, the reference, the third image (difference or z),
+/// and the metrics. Images that were not written show as a dash.
+fn row(html: &mut String, dir: &Path, scene: &str, third: &str, metrics: &str) {
+    let img = |f: &str| {
+        if dir.join(scene).join(f).exists() {
+            format!("<img src=\"{scene}/{f}\" alt=\"{f}\">")
+        } else {
+            "—".into()
+        }
+    };
+    writeln!(
+        html,
+        "<tr><td>{scene}</td><td>{}</td><td>{}</td><td>{}</td><td>{metrics}</td></tr>",
+        img("ours.png"),
+        img("reference.png"),
+        img(third)
+    )
+    .unwrap();
+}
+
 /// Writes images and `index.html` under `dir`.
 pub fn write(dir: &Path, outcomes: &[Outcome], mitsuba: &[MiOutcome]) -> Result<()> {
     std::fs::create_dir_all(dir)?;
@@ -185,21 +205,7 @@ Failing pixels are red. See conformance/docs/tolerances.md.</p>",
                 o.seconds
             )?;
         }
-        let img = |f: &str| {
-            if sub.join(f).exists() {
-                format!("<img src=\"{}/{f}\" alt=\"{f}\">", o.scene)
-            } else {
-                "—".into()
-            }
-        };
-        writeln!(
-            html,
-            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{metrics}</td></tr>",
-            o.scene,
-            img("ours.png"),
-            img("reference.png"),
-            img("diff.png")
-        )?;
+        row(&mut html, dir, &o.scene, "diff.png", &metrics);
     }
     html.push_str("</table>\n");
     if !mitsuba.is_empty() {
@@ -242,21 +248,7 @@ Geometry: pixel-centre distance and normal against Mitsuba's ray_intersect. See 
                     o.seconds
                 )?;
             }
-            let img = |f: &str| {
-                if sub.join(f).exists() {
-                    format!("<img src=\"{}/{f}\" alt=\"{f}\">", o.scene)
-                } else {
-                    "—".into()
-                }
-            };
-            writeln!(
-                html,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{metrics}</td></tr>",
-                o.scene,
-                img("ours.png"),
-                img("reference.png"),
-                img("z.png")
-            )?;
+            row(&mut html, dir, &o.scene, "z.png", &metrics);
         }
         html.push_str("</table>\n");
     }

@@ -8,43 +8,10 @@ use renderer::shapes::{Mesh, Shape, Triangle};
 use renderer::{Affine64, Aggregate, Hit, Instance, Ray, Real, Transform, Vec3};
 use std::sync::Arc;
 
+mod common;
+use common::SplitMix;
+
 const INF: Real = Real::INFINITY;
-
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn f(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.f()
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-    fn chance(&mut self, p: f64) -> bool {
-        self.f() < p
-    }
-    fn vec(&mut self, a: f64, b: f64) -> DVec3 {
-        DVec3::new(self.range(a, b), self.range(a, b), self.range(a, b))
-    }
-    fn unit(&mut self) -> DVec3 {
-        loop {
-            let v = self.vec(-1.0, 1.0);
-            let l = v.length_squared();
-            if l > 1e-4 && l <= 1.0 {
-                return v / l.sqrt();
-            }
-        }
-    }
-}
 
 /// A random affine map: rotation, non-uniform scale, sometimes a shear, translation.
 fn random_affine(rng: &mut SplitMix, extent: f64, size: f64) -> Affine64 {

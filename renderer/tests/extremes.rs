@@ -19,44 +19,13 @@ use std::f64::consts::TAU;
 use std::path::Path;
 use std::sync::Arc;
 
+mod common;
+use common::SplitMix;
+
 /// Machine epsilon of the renderer's precision.
 const EPS: f64 = Real::EPSILON as f64;
 const INF: Real = Real::INFINITY;
 const F64: bool = cfg!(feature = "f64");
-
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn f(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.f()
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.f() * n as f64) as usize % n
-    }
-    fn unit(&mut self) -> DVec3 {
-        loop {
-            let v = DVec3::new(
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-                self.range(-1.0, 1.0),
-            );
-            let l = v.length();
-            if l > 1e-2 && l <= 1.0 {
-                return v / l;
-            }
-        }
-    }
-}
 
 fn report(what: &str, v: impl std::fmt::Display) {
     eprintln!("measured [{}] {what}: {v}", renderer::real::PRECISION);
@@ -504,14 +473,14 @@ fn mesh_edges_and_vertices_are_watertight() {
         };
         for _ in 0..PER {
             let target = if case % 2 == 0 {
-                let (a, b) = edges[rng.below(edges.len())];
+                let (a, b) = edges[rng.below_scaled(edges.len())];
                 let (pa, pb) = (
                     dvec3(mesh.positions[a as usize]),
                     dvec3(mesh.positions[b as usize]),
                 );
                 pa + (pb - pa) * rng.f()
             } else {
-                dvec3(mesh.positions[verts[rng.below(verts.len())] as usize])
+                dvec3(mesh.positions[verts[rng.below_scaled(verts.len())] as usize])
             };
             // From the outside, within 60° of the surface normal.
             let n = if closed { target.normalize() } else { DVec3::Y };
@@ -623,7 +592,7 @@ fn seams_apexes_edges_and_corners_hit() {
             if rng.f() < 0.5 { -1.0 } else { 1.0 },
             if rng.f() < 0.5 { -1.0 } else { 1.0 },
         ];
-        let free = rng.below(4); // 0..3: an edge along that axis; 3: a corner.
+        let free = rng.below_scaled(4); // 0..3: an edge along that axis; 3: a corner.
         let mut target = DVec3::from(s);
         let mut d = DVec3::ZERO;
         for k in 0..3 {
@@ -743,7 +712,7 @@ fn grazing_rays_on_plane_disk_and_box() {
             }
             // A box face: target on a random face, within 0.9 of its centre or 1.02–1.2
             // beyond it along one axis.
-            let axis = rng.below(3);
+            let axis = rng.below_scaled(3);
             let sgn = if rng.f() < 0.5 { -1.0 } else { 1.0 };
             let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
             let mut target = DVec3::ZERO;

@@ -10,6 +10,9 @@ use renderer::transform::TransformError;
 use renderer::{Affine64, Aggregate, Hit, Instance, Ray, Real, Transform, Vec3};
 use std::sync::Arc;
 
+mod common;
+use common::SplitMix;
+
 /// Relative tolerance on t against the f64 closed form.
 #[cfg(not(feature = "f64"))]
 const T_TOL: f64 = 1e-5;
@@ -30,45 +33,6 @@ const G_TOL: f64 = 1e-5;
 const G_TOL: f64 = 1e-11;
 
 const INF: Real = Real::INFINITY;
-
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn f(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.f()
-    }
-    fn vec(&mut self, a: f64, b: f64) -> DVec3 {
-        DVec3::new(self.range(a, b), self.range(a, b), self.range(a, b))
-    }
-    /// Uniform in the unit ball.
-    fn ball(&mut self) -> DVec3 {
-        loop {
-            let v = self.vec(-1.0, 1.0);
-            if v.length_squared() <= 1.0 {
-                return v;
-            }
-        }
-    }
-    fn unit(&mut self) -> DVec3 {
-        loop {
-            let v = self.ball();
-            let l = v.length();
-            if l > 1e-2 {
-                return v / l;
-            }
-        }
-    }
-}
 
 fn affine(m: DMat3, d: DVec3) -> Affine64 {
     Affine64 { m, d }

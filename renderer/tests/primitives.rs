@@ -215,6 +215,9 @@ enum Want {
 }
 use Want::Miss;
 
+mod common;
+use common::SplitMix;
+
 fn hit(t: f64, n: [f64; 3], uv: [f64; 2]) -> Want {
     Want::Hit { t, n, uv: Some(uv) }
 }
@@ -843,37 +846,6 @@ fn mesh_quad() {
 
 // ---------------------------------------------------------------------------------------
 // Random rays against an independent f64 reference.
-
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    fn f(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.f()
-    }
-    fn vec(&mut self, a: f64, b: f64) -> DVec3 {
-        DVec3::new(self.range(a, b), self.range(a, b), self.range(a, b))
-    }
-    fn unit(&mut self) -> DVec3 {
-        loop {
-            let v = self.vec(-1.0, 1.0);
-            let l = v.length_squared();
-            if l > 1e-4 && l <= 1.0 {
-                return v / l.sqrt();
-            }
-        }
-    }
-}
 
 /// The roots of Q(o + t·d) = k for the diagonal quadratic form Q(v) = Σ wᵢ·vᵢ² (all of
 /// them; the leading coefficient may be ~0). The discriminant b² − a·c is computed as
