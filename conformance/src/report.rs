@@ -140,6 +140,34 @@ fn z_image(z: &[f64], alpha: f64) -> Vec<u8> {
     out
 }
 
+/// Starts a scene's row: writes our image into the scene's folder and returns the folder
+/// and the verdict line of the metrics.
+fn begin_row(
+    dir: &Path,
+    scene: &str,
+    ours: &Image,
+    verdict: crate::harness::Verdict,
+    reference: &str,
+) -> Result<(std::path::PathBuf, String)> {
+    let sub = dir.join(scene);
+    std::fs::create_dir_all(&sub)?;
+    save_png(
+        &sub.join("ours.png"),
+        ours.width,
+        ours.height,
+        srgb(ours.width, ours.height, &ours.rgb),
+    )?;
+    let class = if verdict == crate::harness::Verdict::Pass {
+        "pass"
+    } else {
+        "fail"
+    };
+    Ok((
+        sub,
+        format!("<span class=\"{class}\">{verdict}</span> against {reference}"),
+    ))
+}
+
 /// One table row: the scene, our image, the reference, the third image (difference or z),
 /// and the metrics. Images that were not written show as a dash.
 fn row(html: &mut String, dir: &Path, scene: &str, third: &str, metrics: &str) {
@@ -177,19 +205,8 @@ Failing pixels are red. See conformance/docs/tolerances.md.</p>",
     )?;
     html.push_str("<table><tr><th>scene</th><th>ours</th><th>reference</th><th>difference</th><th>metrics</th></tr>\n");
     for o in outcomes {
-        let sub = dir.join(&o.scene);
-        std::fs::create_dir_all(&sub)?;
+        let (sub, mut metrics) = begin_row(dir, &o.scene, &o.ours, o.verdict, &o.reference)?;
         let (w, h) = (o.ours.width, o.ours.height);
-        save_png(&sub.join("ours.png"), w, h, srgb(w, h, &o.ours.rgb))?;
-        let class = if o.verdict == crate::harness::Verdict::Pass {
-            "pass"
-        } else {
-            "fail"
-        };
-        let mut metrics = format!(
-            "<span class=\"{class}\">{}</span> against {}",
-            o.verdict, o.reference
-        );
         if let (Some(r), Some(c)) = (&o.reference_rgb, &o.cmp) {
             save_png(&sub.join("reference.png"), w, h, srgb(w, h, r))?;
             save_png(&sub.join("diff.png"), w, h, diff_image(c, &o.ours.rgb, r))?;
@@ -216,19 +233,8 @@ Geometry: pixel-centre distance and normal against Mitsuba's ray_intersect. See 
 <table><tr><th>scene</th><th>ours</th><th>Mitsuba</th><th>z</th><th>metrics</th></tr>\n",
         );
         for o in mitsuba {
-            let sub = dir.join(&o.scene);
-            std::fs::create_dir_all(&sub)?;
+            let (sub, mut metrics) = begin_row(dir, &o.scene, &o.ours, o.verdict, "mitsuba")?;
             let (w, h) = (o.ours.width, o.ours.height);
-            save_png(&sub.join("ours.png"), w, h, srgb(w, h, &o.ours.rgb))?;
-            let class = if o.verdict == crate::harness::Verdict::Pass {
-                "pass"
-            } else {
-                "fail"
-            };
-            let mut metrics = format!(
-                "<span class=\"{class}\">{}</span> against mitsuba",
-                o.verdict
-            );
             if let (Some(r), Some(g), Some(rgb)) = (&o.radiance, &o.geometry, &o.reference_rgb) {
                 save_png(&sub.join("reference.png"), w, h, srgb(w, h, rgb))?;
                 let alpha = crate::stats::sidak_alpha((w * h) as usize);

@@ -344,13 +344,7 @@ impl<'a> PhysicalIntegrator<'a> {
         self.scene.root.occluded(&ray, t_min, limit)
     }
 
-    /// Next-event estimation at a non-delta surface: every light once, area lights and the
-    /// environment weighted by MIS against BSDF sampling.
-    fn direct_light(&self, s: &Surface, wo: glam::DVec3, smp: &mut PixelSampler) -> glam::DVec3 {
-        let sum = self.direct_light_inner(s, wo, smp);
-        sum
-    }
-
+    /// The diffuse BSDF times cosine for light sampling (with the test-only fault applied).
     fn eval_light(&self, s: &Surface, wo: glam::DVec3, wi: glam::DVec3) -> (glam::DVec3, f64) {
         let (f, pdf) = s.eval_diffuse(wo, wi);
         if self.fault == Some(Fault::MissingCosine) && pdf > 0.0 {
@@ -360,12 +354,9 @@ impl<'a> PhysicalIntegrator<'a> {
         (f, pdf)
     }
 
-    fn direct_light_inner(
-        &self,
-        s: &Surface,
-        wo: glam::DVec3,
-        smp: &mut PixelSampler,
-    ) -> glam::DVec3 {
+    /// Next-event estimation at a non-delta surface: every light once, area lights and the
+    /// environment weighted by MIS against BSDF sampling.
+    fn direct_light(&self, s: &Surface, wo: glam::DVec3, smp: &mut PixelSampler) -> glam::DVec3 {
         let mut sum = glam::DVec3::ZERO;
         let p = dv(s.p);
         for light in &self.scene.lights {
