@@ -1,41 +1,190 @@
-//! A bounding volume hierarchy built by binned SAH (Wald 2007), stored as a flat node
-//! array, and traversed with a fixed-size stack: traversal never allocates.
+//! A bounding volume hierarchy: built by binned SAH (Wald 2007) as a binary tree, then
+//! collapsed into a 4-wide tree (each node holds the boxes of up to four children side by
+//! side, so one SIMD slab test covers them all). Nodes live in a flat array, 64-byte
+//! aligned, and traversal uses a fixed-size stack: it never allocates.
 //!
 //! The BVH knows nothing about what it bounds. It is built from a list of boxes and its
 //! traversal calls a closure with primitive indices, so one implementation serves the
-//! instance level and every mesh.
+//! instance level and every mesh. The owner stores its primitives in leaf order
+//! ([`Bvh::build`] returns them so), and a leaf names a run of consecutive slots.
 
 use crate::aabb::Aabb;
 use crate::ray::Ray;
-use crate::real::{Real, Vec3};
+use crate::real::{gamma, pow2, Real, Vec3, Vec4};
 
 const BINS: usize = 16;
 const MAX_LEAF: usize = 4;
-/// Depth past which a node becomes a leaf; keeps the traversal stack bounded.
+/// Depth past which the SAH stops splitting; keeps the traversal stack bounded.
 const MAX_DEPTH: usize = 60;
-const STACK: usize = 64;
-/// Cost of one traversal step relative to one primitive test, for the SAH.
-const TRAVERSAL_COST: Real = 1.0;
+/// Most primitives one leaf can name (counts are bytes). A bigger set that the SAH cannot
+/// split (coincident centroids, or the depth limit) is cut in halves by index instead,
+/// which adds at most 24 levels below `MAX_DEPTH` for any `u32` count.
+const LEAF_LIMIT: usize = u8::MAX as usize;
+/// Traversal stack for the deepest tree the build can make: a node pushes at most three
+/// children, once per level.
+const LONG_STACK: usize = 3 * (MAX_DEPTH + 26) + 1;
+/// Traversal stack for trees of depth up to 21 (every tree of fewer than about a million
+/// primitives in practice): a smaller array is cheaper to set up for every ray.
+const SHORT_STACK: usize = 64;
 
-/// One node. Interior nodes (`count == 0`) have children at `first` and `first + 1`;
-/// leaves hold `indices[first..first + count]`.
+/// A node of the binary tree the SAH builds. Interior nodes (`count == 0`) have children
+/// at `first` and `first + 1`; leaves name the slots `first..first + count`.
 #[derive(Clone, Copy, Debug)]
-pub struct Node {
-    /// Bounds of everything below.
-    pub bounds: Aabb,
-    /// First child, or first primitive slot.
-    pub first: u32,
-    /// Number of primitives; 0 for an interior node.
-    pub count: u32,
+struct Node2 {
+    bounds: Aabb,
+    first: u32,
+    count: u32,
+}
+
+/// A node of the 4-wide tree. Its children's boxes are quantized to one byte per
+/// coordinate on a grid laid over the node's own box: on axis `a`, child `k` spans
+/// `origin[a] + q·2^exp[a]` for `q` from `qmin[a][k]` to `qmax[a][k]`. The build rounds
+/// every bound outward and checks it with the same arithmetic traversal uses, so a
+/// decoded box always contains the child's exact box: quantization can add box visits,
+/// never lose a hit. Per child the node holds either an interior node index
+/// (`count == 0`) or a leaf's first slot and count. In the `f32` build a node is one
+/// 64-byte cache line (four children with full-precision boxes took two).
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    origin: [Real; 3],
+    child: [u32; 4],
+    exp: [i16; 3],
+    qmin: [[u8; 4]; 3],
+    qmax: [[u8; 4]; 3],
+    count: [u8; 4],
+    lanes: u8,
+}
+
+#[cfg(not(feature = "f64"))]
+const _: () = assert!(std::mem::size_of::<Node>() == 64);
+
+/// The grid coordinate `q` on an axis with this origin and exponent, as traversal
+/// decodes it.
+#[inline]
+fn decode(origin: Real, exp: i16, q: u8) -> Real {
+    origin + q as Real * pow2(exp as i32)
+}
+
+/// Four grid coordinates as lanes.
+#[inline]
+fn lanes_of(q: &[u8; 4]) -> Vec4 {
+    Vec4::new(q[0] as Real, q[1] as Real, q[2] as Real, q[3] as Real)
+}
+
+impl Node {
+    const EMPTY: Node = Node {
+        origin: [0.0; 3],
+        child: [0; 4],
+        exp: [0; 3],
+        qmin: [[0; 4]; 3],
+        qmax: [[0; 4]; 3],
+        count: [0; 4],
+        lanes: 0,
+    };
+
+    /// The slab test of [`Aabb::hit`] on the four decoded child boxes at once: each
+    /// lane's entry distance, and a bit mask of the lanes whose box the ray overlaps
+    /// within `[t_min, t_max]`. NaN slabs (origin on a slab plane, direction parallel to
+    /// it) do not constrain the ray, and the far distance is inflated by `1 + 2γ(3)`, as
+    /// there.
+    #[inline]
+    fn hit(&self, o: &[Vec4; 3], inv_d: &[Vec4; 3], t_min: Real, t_max: Real) -> (Vec4, u32) {
+        let mut near = Vec4::splat(t_min);
+        let mut far = Vec4::splat(t_max);
+        for a in 0..3 {
+            let origin = Vec4::splat(self.origin[a]);
+            let step = Vec4::splat(pow2(self.exp[a] as i32));
+            let lo = origin + lanes_of(&self.qmin[a]) * step;
+            let hi = origin + lanes_of(&self.qmax[a]) * step;
+            let t0 = (lo - o[a]) * inv_d[a];
+            let t1 = (hi - o[a]) * inv_d[a];
+            let nan = t0.is_nan_mask() | t1.is_nan_mask();
+            near = near.max(Vec4::select(nan, Vec4::NEG_INFINITY, t0.min(t1)));
+            far = far.min(Vec4::select(nan, Vec4::INFINITY, t0.max(t1)));
+        }
+        let mask = near.cmple(far * (1.0 + 2.0 * gamma(3))).bitmask() & ((1 << self.lanes) - 1);
+        (near, mask)
+    }
+
+    /// Lays the grid over `boxes` (the children, in lane order) and stores their bounds.
+    fn quantize(&mut self, boxes: &[Aabb]) {
+        let parent = boxes.iter().fold(Aabb::EMPTY, |u, b| u.union(b));
+        self.lanes = boxes.len() as u8;
+        for a in 0..3 {
+            let origin = parent.min[a];
+            let extent = parent.max[a] as f64 - origin as f64;
+            // The smallest step with 255 steps covering the extent, then coarser until
+            // every child's bounds fit (a guard against rounding in the extent).
+            let mut exp = if extent > 0.0 {
+                (extent / 255.0).log2().ceil() as i32 - 1
+            } else {
+                i32::MIN
+            };
+            loop {
+                exp = exp.clamp(i16::MIN as i32, i16::MAX as i32);
+                let e = exp as i16;
+                let fits = boxes.iter().enumerate().all(|(k, b)| {
+                    match (
+                        lower_code(origin, e, b.min[a]),
+                        upper_code(origin, e, b.max[a]),
+                    ) {
+                        (Some(lo), Some(hi)) => {
+                            self.qmin[a][k] = lo;
+                            self.qmax[a][k] = hi;
+                            true
+                        }
+                        _ => false,
+                    }
+                });
+                if fits {
+                    self.origin[a] = origin;
+                    self.exp[a] = e;
+                    break;
+                }
+                exp += 1;
+            }
+        }
+    }
+}
+
+/// The largest grid coordinate whose decoded value is at most `x` (with `x` at or above
+/// the origin, 0 always qualifies).
+fn lower_code(origin: Real, exp: i16, x: Real) -> Option<u8> {
+    let guess = ((x as f64 - origin as f64) / pow2(exp as i32) as f64).floor();
+    let mut q = guess.clamp(0.0, 255.0) as u8;
+    while q > 0 && decode(origin, exp, q) > x {
+        q -= 1;
+    }
+    (decode(origin, exp, q) <= x).then_some(q)
+}
+
+/// The smallest grid coordinate whose decoded value is at least `x`, if one exists.
+fn upper_code(origin: Real, exp: i16, x: Real) -> Option<u8> {
+    let guess = ((x as f64 - origin as f64) / pow2(exp as i32) as f64).ceil();
+    let mut q = guess.clamp(0.0, 255.0) as u8;
+    while q < 255 && decode(origin, exp, q) < x {
+        q += 1;
+    }
+    (decode(origin, exp, q) >= x).then_some(q)
+}
+
+/// A child waiting on the traversal stack, with its entry distance.
+#[derive(Clone, Copy)]
+struct Entry {
+    child: u32,
+    count: u8,
+    near: Real,
 }
 
 /// A BVH over primitives given by their boxes.
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
-    /// Nodes; the root is `nodes[0]`.
-    pub nodes: Vec<Node>,
-    /// Primitive indices referenced by leaves.
-    pub indices: Vec<u32>,
+    /// The root is `nodes[0]`; empty when there are no primitives.
+    nodes: Vec<Node>,
+    bounds: Aabb,
+    /// Most stack entries a traversal can need: 3 per level below the root, plus one.
+    stack_need: usize,
 }
 
 /// What the traversal closure says about a primitive.
@@ -47,94 +196,27 @@ pub enum Visit {
 }
 
 impl Bvh {
-    /// Builds a BVH over `boxes`, which must all be finite.
-    pub fn build(boxes: &[Aabb]) -> Bvh {
-        let n = boxes.len();
-        let mut bvh = Bvh {
-            nodes: Vec::with_capacity(2 * n.max(1)),
-            indices: (0..n as u32).collect(),
+    /// Builds a BVH over `items`, whose boxes (all finite) are `boxes`, and returns it with
+    /// the items permuted into leaf order: a leaf's primitives then sit side by side in
+    /// memory, and traversal reads them with no index array in between.
+    /// `traversal_cost` is the cost of one binary node visit in units of one primitive
+    /// test, for the SAH.
+    pub fn build<T>(items: Vec<T>, boxes: &[Aabb], traversal_cost: Real) -> (Bvh, Vec<T>) {
+        assert_eq!(items.len(), boxes.len(), "one box per item");
+        let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
+        let bvh = if boxes.is_empty() {
+            Bvh::default()
+        } else {
+            let binary = build_binary(&mut order, boxes, traversal_cost);
+            let (nodes, depth) = collapse(&binary);
+            Bvh {
+                nodes,
+                bounds: binary[0].bounds,
+                stack_need: 3 * depth + 1,
+            }
         };
-        if n == 0 {
-            bvh.nodes.push(Node {
-                bounds: Aabb::EMPTY,
-                first: 0,
-                count: 0,
-            });
-            return bvh;
-        }
-        let centroids: Vec<Vec3> = boxes.iter().map(|b| b.centroid()).collect();
-        bvh.nodes.push(Node {
-            bounds: Aabb::EMPTY,
-            first: 0,
-            count: n as u32,
-        });
-        // Work list of (node, start, end, depth).
-        let mut work = vec![(0usize, 0usize, n, 0usize)];
-        while let Some((node, start, end, depth)) = work.pop() {
-            let mut bounds = Aabb::EMPTY;
-            let mut cbounds = Aabb::EMPTY;
-            for &i in &bvh.indices[start..end] {
-                bounds = bounds.union(&boxes[i as usize]);
-                cbounds.grow(centroids[i as usize]);
-            }
-            bvh.nodes[node].bounds = bounds;
-            let count = end - start;
-            let leaf = |bvh: &mut Bvh| {
-                bvh.nodes[node].first = start as u32;
-                bvh.nodes[node].count = count as u32;
-            };
-            if count <= 1 || depth >= MAX_DEPTH {
-                leaf(&mut bvh);
-                continue;
-            }
-            let Some((axis, split_pos, cost)) =
-                best_split(&bvh.indices[start..end], boxes, &centroids, &cbounds)
-            else {
-                leaf(&mut bvh);
-                continue;
-            };
-            let leaf_cost = count as Real;
-            if count <= MAX_LEAF && cost >= leaf_cost {
-                leaf(&mut bvh);
-                continue;
-            }
-            // Partition in place by bin.
-            let slice = &mut bvh.indices[start..end];
-            let mut mid = 0;
-            for k in 0..slice.len() {
-                if bin_of(centroids[slice[k] as usize][axis], &cbounds, axis) < split_pos {
-                    slice.swap(k, mid);
-                    mid += 1;
-                }
-            }
-            if mid == 0 || mid == count {
-                leaf(&mut bvh);
-                continue;
-            }
-            let left = bvh.nodes.len();
-            for _ in 0..2 {
-                bvh.nodes.push(Node {
-                    bounds: Aabb::EMPTY,
-                    first: 0,
-                    count: 0,
-                });
-            }
-            bvh.nodes[node].first = left as u32;
-            bvh.nodes[node].count = 0;
-            work.push((left + 1, start + mid, end, depth + 1));
-            work.push((left, start, start + mid, depth + 1));
-        }
-        bvh
-    }
-
-    /// Permutes `items` (one per box given to [`Bvh::build`]) into leaf order and makes the
-    /// index array the identity, so that a leaf's primitives sit side by side in memory
-    /// and traversal reads them without an indirection into scattered storage.
-    pub fn reorder<T>(&mut self, items: Vec<T>) -> Vec<T> {
-        assert_eq!(items.len(), self.indices.len(), "one item per box");
         let mut slots: Vec<Option<T>> = items.into_iter().map(Some).collect();
-        let ordered = self
-            .indices
+        let ordered = order
             .iter()
             .map(|&i| {
                 slots[i as usize]
@@ -142,15 +224,17 @@ impl Bvh {
                     .expect("the BVH references each primitive once")
             })
             .collect();
-        for (k, i) in self.indices.iter_mut().enumerate() {
-            *i = k as u32;
-        }
-        ordered
+        (bvh, ordered)
     }
 
     /// Bounds of everything.
     pub fn bounds(&self) -> Aabb {
-        self.nodes[0].bounds
+        self.bounds
+    }
+
+    /// Number of 4-wide nodes, for statistics.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
     }
 
     /// Visits, nearest box first, every primitive whose box the ray overlaps within
@@ -158,7 +242,19 @@ impl Bvh {
     /// shrinks `t_max`. With `any`, traversal stops at the first hit. Returns whether
     /// anything was hit.
     #[inline]
-    pub fn traverse<F>(
+    pub fn traverse<F>(&self, ray: &Ray, t_min: Real, t_max: Real, any: bool, visit: F) -> bool
+    where
+        F: FnMut(u32, Real) -> Visit,
+    {
+        if self.stack_need <= SHORT_STACK {
+            self.traverse_with::<SHORT_STACK, F>(ray, t_min, t_max, any, visit)
+        } else {
+            self.traverse_with::<LONG_STACK, F>(ray, t_min, t_max, any, visit)
+        }
+    }
+
+    #[inline]
+    fn traverse_with<const STACK: usize, F>(
         &self,
         ray: &Ray,
         t_min: Real,
@@ -169,19 +265,59 @@ impl Bvh {
     where
         F: FnMut(u32, Real) -> Visit,
     {
-        let inv_d = Vec3::ONE / ray.d;
-        let mut stack = [0u32; STACK];
-        let mut sp = 0usize;
-        let mut hit = false;
-        let root = &self.nodes[0];
-        if root.bounds.hit(ray.o, inv_d, t_min, t_max).is_none() {
+        if self.nodes.is_empty() {
             return false;
         }
-        let mut node = 0u32;
+        let inv = Vec3::ONE / ray.d;
+        let o = [
+            Vec4::splat(ray.o.x),
+            Vec4::splat(ray.o.y),
+            Vec4::splat(ray.o.z),
+        ];
+        let inv_d = [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)];
+        let grow = 1.0 + 2.0 * gamma(3);
+        let mut stack = [Entry {
+            child: 0,
+            count: 0,
+            near: 0.0,
+        }; STACK];
+        let mut sp = 0usize;
+        let mut hit = false;
+        let (mut child, mut count) = (0u32, 0u8);
         loop {
-            let n = &self.nodes[node as usize];
-            if n.count > 0 {
-                for &i in &self.indices[n.first as usize..(n.first + n.count) as usize] {
+            if count == 0 {
+                let n = &self.nodes[child as usize];
+                let (near, mut mask) = n.hit(&o, &inv_d, t_min, t_max);
+                if mask != 0 {
+                    // The overlapped lanes, sorted nearest first (stable, so ties keep
+                    // lane order and the result never depends on anything else).
+                    let near = near.to_array();
+                    let mut lanes = [0usize; 4];
+                    let mut k = 0;
+                    while mask != 0 {
+                        let lane = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let mut j = k;
+                        while j > 0 && near[lanes[j - 1]] > near[lane] {
+                            lanes[j] = lanes[j - 1];
+                            j -= 1;
+                        }
+                        lanes[j] = lane;
+                        k += 1;
+                    }
+                    for &lane in lanes[1..k].iter().rev() {
+                        stack[sp] = Entry {
+                            child: n.child[lane],
+                            count: n.count[lane],
+                            near: near[lane],
+                        };
+                        sp += 1;
+                    }
+                    (child, count) = (n.child[lanes[0]], n.count[lanes[0]]);
+                    continue;
+                }
+            } else {
+                for i in child..child + count as u32 {
                     if let Visit::Hit(t) = visit(i, t_max) {
                         hit = true;
                         if any {
@@ -190,50 +326,145 @@ impl Bvh {
                         t_max = t;
                     }
                 }
-            } else {
-                let (a, b) = (n.first, n.first + 1);
-                let ta = self.nodes[a as usize]
-                    .bounds
-                    .hit(ray.o, inv_d, t_min, t_max);
-                let tb = self.nodes[b as usize]
-                    .bounds
-                    .hit(ray.o, inv_d, t_min, t_max);
-                match (ta, tb) {
-                    (Some(x), Some(y)) => {
-                        let (near, far) = if x <= y { (a, b) } else { (b, a) };
-                        stack[sp] = far;
-                        sp += 1;
-                        node = near;
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        node = a;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node = b;
-                        continue;
-                    }
-                    (None, None) => {}
-                }
             }
-            // Pop the next node that still overlaps the (possibly shrunk) interval.
+            // Pop the next child whose box the (possibly shrunk) interval still reaches.
             loop {
                 if sp == 0 {
                     return hit;
                 }
                 sp -= 1;
-                node = stack[sp];
-                if self.nodes[node as usize]
-                    .bounds
-                    .hit(ray.o, inv_d, t_min, t_max)
-                    .is_some()
-                {
+                let e = stack[sp];
+                if e.near <= t_max * grow {
+                    (child, count) = (e.child, e.count);
                     break;
                 }
             }
         }
     }
+}
+
+/// The binary SAH tree over `order` (primitive indices, permuted in place into leaf
+/// order); the root is node 0.
+fn build_binary(order: &mut [u32], boxes: &[Aabb], traversal_cost: Real) -> Vec<Node2> {
+    let centroids: Vec<Vec3> = boxes.iter().map(|b| b.centroid()).collect();
+    let mut nodes = Vec::with_capacity(2 * order.len());
+    nodes.push(Node2 {
+        bounds: Aabb::EMPTY,
+        first: 0,
+        count: 0,
+    });
+    // Work list of (node, start, end, depth).
+    let mut work = vec![(0usize, 0usize, order.len(), 0usize)];
+    while let Some((node, start, end, depth)) = work.pop() {
+        let mut bounds = Aabb::EMPTY;
+        let mut cbounds = Aabb::EMPTY;
+        for &i in &order[start..end] {
+            bounds = bounds.union(&boxes[i as usize]);
+            cbounds.grow(centroids[i as usize]);
+        }
+        let count = end - start;
+        nodes[node] = Node2 {
+            bounds,
+            first: start as u32,
+            count: count as u32,
+        };
+        let split = if count <= 1 || depth >= MAX_DEPTH {
+            None
+        } else {
+            best_split(
+                &order[start..end],
+                boxes,
+                &centroids,
+                &cbounds,
+                &bounds,
+                traversal_cost,
+            )
+            .filter(|&(_, _, cost)| count > MAX_LEAF || cost < count as Real)
+            .map(|(axis, split_pos, _)| {
+                // Partition in place by bin.
+                let slice = &mut order[start..end];
+                let mut mid = 0;
+                for k in 0..slice.len() {
+                    if bin_of(centroids[slice[k] as usize][axis], &cbounds, axis) < split_pos {
+                        slice.swap(k, mid);
+                        mid += 1;
+                    }
+                }
+                mid
+            })
+            .filter(|&mid| mid > 0 && mid < count)
+        };
+        let mid = match split {
+            Some(mid) => mid,
+            None if count > LEAF_LIMIT => count / 2,
+            None => continue,
+        };
+        let left = nodes.len();
+        nodes.extend([nodes[node]; 2]);
+        nodes[node].first = left as u32;
+        nodes[node].count = 0;
+        work.push((left + 1, start + mid, end, depth + 1));
+        work.push((left, start, start + mid, depth + 1));
+    }
+    nodes
+}
+
+/// Collapses a binary tree into a 4-wide one: each 4-wide node takes a binary node's
+/// children and keeps opening the interior child with the largest surface area until it
+/// has four. Interior children are stored side by side, depth first.
+/// Returns the nodes and the number of levels below the root.
+fn collapse(bin: &[Node2]) -> (Vec<Node>, usize) {
+    let mut out = vec![Node::EMPTY];
+    let mut depth = 0;
+    let mut work = vec![(0usize, 0usize, 0usize)];
+    while let Some((b, o, level)) = work.pop() {
+        depth = depth.max(level);
+        let mut kids = [0usize; 4];
+        let mut k = 1;
+        if bin[b].count == 0 {
+            kids[..2].copy_from_slice(&[bin[b].first as usize, bin[b].first as usize + 1]);
+            k = 2;
+            while k < 4 {
+                let mut open: Option<usize> = None;
+                for i in 0..k {
+                    let n = &bin[kids[i]];
+                    if n.count == 0
+                        && open.is_none_or(|j| n.bounds.area() > bin[kids[j]].bounds.area())
+                    {
+                        open = Some(i);
+                    }
+                }
+                let Some(i) = open else { break };
+                let first = bin[kids[i]].first as usize;
+                kids[i] = first;
+                kids[k] = first + 1;
+                k += 1;
+            }
+        } else {
+            kids[0] = b;
+        }
+        let mut node = Node::EMPTY;
+        let boxes: Vec<Aabb> = kids[..k].iter().map(|&kid| bin[kid].bounds).collect();
+        node.quantize(&boxes);
+        let mut interior = Vec::new();
+        for (lane, &kid) in kids[..k].iter().enumerate() {
+            let n = &bin[kid];
+            if n.count == 0 {
+                node.child[lane] = (out.len() + interior.len()) as u32;
+                interior.push(kid);
+            } else {
+                node.child[lane] = n.first;
+                node.count[lane] = n.count as u8;
+            }
+        }
+        out[o] = node;
+        let base = out.len();
+        out.extend(std::iter::repeat_n(Node::EMPTY, interior.len()));
+        for (j, &kid) in interior.iter().enumerate().rev() {
+            work.push((kid, base + j, level + 1));
+        }
+    }
+    (out, depth)
 }
 
 #[inline]
@@ -253,12 +484,10 @@ fn best_split(
     boxes: &[Aabb],
     centroids: &[Vec3],
     cb: &Aabb,
+    parent: &Aabb,
+    traversal_cost: Real,
 ) -> Option<(usize, usize, Real)> {
     let mut best: Option<(usize, usize, Real)> = None;
-    let mut parent = Aabb::EMPTY;
-    for &i in idx {
-        parent = parent.union(&boxes[i as usize]);
-    }
     let parent_area = parent.area().max(Real::MIN_POSITIVE);
     for axis in 0..3 {
         if cb.max[axis] - cb.min[axis] <= 0.0 {
@@ -290,7 +519,7 @@ fn best_split(
             if lc == 0 || right_cnt[k] == 0 {
                 continue;
             }
-            let cost = TRAVERSAL_COST
+            let cost = traversal_cost
                 + (left.area() * lc as Real + right_area[k] * right_cnt[k] as Real) / parent_area;
             if best.is_none_or(|(_, _, b)| cost < b) {
                 best = Some((axis, k, cost));
@@ -298,4 +527,64 @@ fn best_split(
         }
     }
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Decoded child boxes contain the exact ones, for boxes tiny, huge, flat, far from the
+    /// origin and straddling it.
+    #[test]
+    fn quantized_boxes_contain_the_exact_boxes() {
+        let mut state = 5u64;
+        let mut rnd = || {
+            state = crate::sampler::mix64(state.wrapping_add(0x9e37_79b9_7f4a_7c15));
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut checked = 0;
+        for scale in [1e-30, 1e-6, 1.0, 1e6, 1e30] {
+            for offset in [0.0, 1.0, -1e5, 3e7, 1e35] {
+                for flat in [false, true] {
+                    let lanes = 1 + (rnd() * 4.0) as usize % 4;
+                    let boxes: Vec<Aabb> = (0..lanes)
+                        .map(|_| {
+                            let p = |r: f64| (offset + (r - 0.5) * scale) as Real;
+                            let a = Vec3::new(p(rnd()), p(rnd()), p(rnd()));
+                            let mut b = Vec3::new(p(rnd()), p(rnd()), p(rnd()));
+                            if flat {
+                                b.y = a.y;
+                            }
+                            Aabb::from_points(a, b)
+                        })
+                        .collect();
+                    let mut node = Node::EMPTY;
+                    node.quantize(&boxes);
+                    assert_eq!(node.lanes as usize, lanes);
+                    for (k, b) in boxes.iter().enumerate() {
+                        for a in 0..3 {
+                            let lo = decode(node.origin[a], node.exp[a], node.qmin[a][k]);
+                            let hi = decode(node.origin[a], node.exp[a], node.qmax[a][k]);
+                            assert!(
+                                lo <= b.min[a] && hi >= b.max[a],
+                                "scale {scale}, offset {offset}, axis {a}: [{lo}, {hi}] does not hold [{}, {}]",
+                                b.min[a],
+                                b.max[a]
+                            );
+                            // Tight: within two grid steps, unless the grid is coarser
+                            // than the coordinates' own spacing.
+                            let step = pow2(node.exp[a] as i32);
+                            let ulp = b.max[a].abs().max(b.min[a].abs()) * Real::EPSILON;
+                            assert!(
+                                hi - lo <= b.max[a] - b.min[a] + 2.0 * step + 4.0 * ulp,
+                                "scale {scale}, offset {offset}: loose box"
+                            );
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+        assert!(checked > 100);
+    }
 }

@@ -12,8 +12,16 @@ mod imp {
     pub type Mat3 = glam::Mat3;
     /// A 2-vector of `Real`.
     pub type Vec2 = glam::Vec2;
+    /// A 4-vector of `Real` (SIMD lanes: the four children of a BVH node).
+    pub type Vec4 = glam::Vec4;
     /// Name of the precision, for reports.
     pub const PRECISION: &str = "f32";
+
+    /// 2^e for `e` clamped to the normal range, built from its bits (no `powi` call).
+    #[inline]
+    pub fn pow2(e: i32) -> Real {
+        f32::from_bits(((e.clamp(-126, 127) + 127) as u32) << 23)
+    }
 }
 
 #[cfg(feature = "f64")]
@@ -26,8 +34,16 @@ mod imp {
     pub type Mat3 = glam::DMat3;
     /// A 2-vector of `Real`.
     pub type Vec2 = glam::DVec2;
+    /// A 4-vector of `Real` (SIMD lanes: the four children of a BVH node).
+    pub type Vec4 = glam::DVec4;
     /// Name of the precision, for reports.
     pub const PRECISION: &str = "f64";
+
+    /// 2^e for `e` clamped to the normal range, built from its bits (no `powi` call).
+    #[inline]
+    pub fn pow2(e: i32) -> Real {
+        f64::from_bits(((e.clamp(-1022, 1023) + 1023) as u64) << 52)
+    }
 }
 
 pub use imp::*;

@@ -213,18 +213,10 @@ impl Transform {
         self.m * p + self.d
     }
 
-    /// Maps a point and its error bound to the outer space (pbrt's rule): the new bound is
-    /// `γ(3)·(|m|·|p| + |d|) + (1 + γ(3))·|m|·err`.
+    /// Maps a point and its error bound to the outer space (see [`map_point_with_error`]).
     #[inline]
     pub fn point_with_error(&self, p: Vec3, err: Vec3) -> (Vec3, Vec3) {
-        let am = Mat3::from_cols(
-            self.m.x_axis.abs(),
-            self.m.y_axis.abs(),
-            self.m.z_axis.abs(),
-        );
-        let g = crate::real::gamma(3);
-        let e = (am * p.abs() + self.d.abs()) * g + am * err * (1.0 + g);
-        (self.point(p), e)
+        map_point_with_error(&self.m, self.d, p, err)
     }
 
     /// Maps a vector to the outer space: `m·v`.
@@ -236,7 +228,7 @@ impl Transform {
     /// Maps a normal to the outer space: `m⁻ᵀ·n` (not renormalized).
     #[inline]
     pub fn normal(&self, n: Vec3) -> Vec3 {
-        self.inv.transpose() * n
+        map_normal(&self.inv, n)
     }
 
     /// Maps a point to the inner space: `m⁻¹·(p − d)`.
@@ -271,4 +263,21 @@ impl Transform {
         }
         out
     }
+}
+
+/// Maps a point and its error bound by `m·p + d` (pbrt's rule): the new bound is
+/// `γ(3)·(|m|·|p| + |d|) + (1 + γ(3))·|m|·err`. A free function so that a caller holding
+/// the matrix in another form (the aggregate's compact spheres) computes the same bits.
+#[inline]
+pub(crate) fn map_point_with_error(m: &Mat3, d: Vec3, p: Vec3, err: Vec3) -> (Vec3, Vec3) {
+    let am = Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+    let g = crate::real::gamma(3);
+    let e = (am * p.abs() + d.abs()) * g + am * err * (1.0 + g);
+    (*m * p + d, e)
+}
+
+/// Maps a normal by `m⁻ᵀ`, given `inv = m⁻¹` (not renormalized).
+#[inline]
+pub(crate) fn map_normal(inv: &Mat3, n: Vec3) -> Vec3 {
+    inv.transpose() * n
 }

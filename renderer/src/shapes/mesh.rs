@@ -73,8 +73,7 @@ impl Mesh {
                 b
             })
             .collect();
-        let mut bvh = Bvh::build(&boxes);
-        let triangles = bvh.reorder(triangles);
+        let (bvh, triangles) = Bvh::build(triangles, &boxes, 1.0);
         Ok(Mesh {
             positions,
             normals,
