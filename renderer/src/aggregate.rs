@@ -53,6 +53,18 @@ impl Hit {
             object_id: 0,
         }
     }
+
+    /// Fills in the material and object id still unassigned, from an enclosing instance.
+    #[inline]
+    fn inherit(mut self, material: u32, object_id: u32) -> Hit {
+        if self.material == INHERIT {
+            self.material = material;
+        }
+        if self.object_id == 0 {
+            self.object_id = object_id;
+        }
+        self
+    }
 }
 
 /// A shape placed by a transform.
@@ -103,13 +115,7 @@ impl Instance {
             h.n_geo = x.normal(h.n_geo);
             h.n_shade = x.normal(h.n_shade);
         }
-        if h.material == INHERIT {
-            h.material = self.material;
-        }
-        if h.object_id == 0 {
-            h.object_id = self.object_id;
-        }
-        h
+        h.inherit(self.material, self.object_id)
     }
 
     /// Whether anything is hit.
@@ -195,13 +201,7 @@ impl Lead {
         (h.p, h.err) = map_point_with_error(&m, self.c, h.p, h.err);
         h.n_geo = map_normal(&inv, h.n_geo);
         h.n_shade = map_normal(&inv, h.n_shade);
-        if h.material == INHERIT {
-            h.material = self.material;
-        }
-        if h.object_id == 0 {
-            h.object_id = self.object_id;
-        }
-        h
+        h.inherit(self.material, self.object_id)
     }
 }
 
