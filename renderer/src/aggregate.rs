@@ -8,7 +8,7 @@
 //! instances that use it.
 
 use crate::aabb::Aabb;
-use crate::bvh::{Bvh, Visit};
+use crate::bvh::{prefetch, Bvh, Visit, BATCH};
 use crate::ray::Ray;
 use crate::real::{Mat3, Real, Vec2, Vec3};
 use crate::shapes::Shape;
@@ -205,6 +205,12 @@ impl Lead {
     }
 }
 
+/// Tree size (BVH nodes plus leads, in bytes) above which [`Aggregate::intersect_many`]
+/// interleaves rays. Below it the tree stays in the L2 cache (1 MiB per core on the
+/// development machine), and one ray at a time is faster: at 10⁴ spheres (0.5 MB)
+/// interleaving took 3.87 ms against 3.71 ms, at 10⁵ (5.4 MB) 4.67 ms against 7.11 ms.
+pub const INTERLEAVE_ABOVE: usize = 1 << 20;
+
 /// Cost of one instance-level node visit in units of one primitive test, for the SAH.
 const TRAVERSAL_COST: Real = 1.0;
 
@@ -284,7 +290,23 @@ impl Aggregate {
     /// Closest hit with `t_min < t < t_max`. The search keeps the winner in its object
     /// space and maps only the final hit to this space.
     pub fn intersect(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
-        let mut best: Option<(usize, Hit)> = None;
+        let (mut best, t_max) = self.nearest_unbounded(ray, t_min, t_max);
+        self.bvh.traverse(ray, t_min, t_max, false, |k, tmax| {
+            self.visit(k, ray, t_min, tmax, &mut best)
+        });
+        best.map(|(k, h)| self.finish(k, h))
+    }
+
+    /// The closest hit among the unbounded instances, with the interval it leaves for
+    /// the BVH.
+    #[inline]
+    fn nearest_unbounded(
+        &self,
+        ray: &Ray,
+        t_min: Real,
+        t_max: Real,
+    ) -> (Option<(usize, Hit)>, Real) {
+        let mut best = None;
         let mut t_max = t_max;
         for (k, inst) in self.unbounded().iter().enumerate() {
             if let Some(h) = inst.local_hit(ray, t_min, t_max) {
@@ -292,21 +314,74 @@ impl Aggregate {
                 best = Some((self.bounded() + k, h));
             }
         }
-        if self.bounded() > 0 {
-            self.bvh.traverse(ray, t_min, t_max, false, |k, tmax| {
-                match self.local_hit(k as usize, ray, t_min, tmax) {
-                    Some(h) => {
-                        best = Some((k as usize, h));
-                        Visit::Hit(h.t)
-                    }
-                    None => Visit::Miss,
-                }
-            });
+        (best, t_max)
+    }
+
+    /// Tests bounded instance `k` for [`Bvh::traverse`], keeping a closer hit in `best`.
+    #[inline]
+    fn visit(
+        &self,
+        k: u32,
+        ray: &Ray,
+        t_min: Real,
+        t_max: Real,
+        best: &mut Option<(usize, Hit)>,
+    ) -> Visit {
+        match self.local_hit(k as usize, ray, t_min, t_max) {
+            Some(h) => {
+                *best = Some((k as usize, h));
+                Visit::Hit(h.t)
+            }
+            None => Visit::Miss,
         }
-        best.map(|(k, h)| match self.leads.get(k) {
+    }
+
+    /// [`Aggregate::intersect`] for many rays: `out[r]` gets exactly what
+    /// `intersect(&rays[r], t_min, t_max)` returns. When the BVH and its records are
+    /// larger than [`INTERLEAVE_ABOVE`], rays are walked [`BATCH`] at a time through
+    /// [`Bvh::traverse_batch`], so that one ray's cache misses overlap the others' work;
+    /// a smaller tree stays in cache and is cheaper one ray at a time. Camera rays go
+    /// through here.
+    pub fn intersect_many(&self, rays: &[Ray], t_min: Real, t_max: Real, out: &mut [Option<Hit>]) {
+        assert_eq!(rays.len(), out.len(), "one output per ray");
+        if !self.interleaves() {
+            for (ray, o) in rays.iter().zip(out.iter_mut()) {
+                *o = self.intersect(ray, t_min, t_max);
+            }
+            return;
+        }
+        for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
+            let mut best: [Option<(usize, Hit)>; BATCH] = [None; BATCH];
+            let mut bound = [t_max; BATCH];
+            for (r, ray) in rays.iter().enumerate() {
+                (best[r], bound[r]) = self.nearest_unbounded(ray, t_min, t_max);
+            }
+            self.bvh.traverse_batch(
+                rays,
+                t_min,
+                &bound[..rays.len()],
+                |r, k, tmax| self.visit(k, &rays[r], t_min, tmax, &mut best[r]),
+                |k| prefetch(&self.leads[k as usize]),
+            );
+            for (o, b) in out.iter_mut().zip(best) {
+                *o = b.map(|(k, h)| self.finish(k, h));
+            }
+        }
+    }
+
+    /// Whether [`Aggregate::intersect_many`] interleaves rays: whether the BVH nodes and
+    /// leads take more than [`INTERLEAVE_ABOVE`] bytes.
+    pub fn interleaves(&self) -> bool {
+        self.bvh.node_bytes() + std::mem::size_of_val(self.leads.as_slice()) > INTERLEAVE_ABOVE
+    }
+
+    /// Maps the winner of a search, bounded instance or not, to this space.
+    #[inline]
+    fn finish(&self, k: usize, h: Hit) -> Hit {
+        match self.leads.get(k) {
             Some(lead) if lead.s != 0.0 => lead.finish(h),
             _ => self.instances[k].finish(h),
-        })
+        }
     }
 
     /// Whether anything is hit with `t_min < t < t_max`.

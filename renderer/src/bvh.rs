@@ -242,104 +242,227 @@ impl Bvh {
     /// shrinks `t_max`. With `any`, traversal stops at the first hit. Returns whether
     /// anything was hit.
     #[inline]
-    pub fn traverse<F>(&self, ray: &Ray, t_min: Real, t_max: Real, any: bool, visit: F) -> bool
-    where
-        F: FnMut(u32, Real) -> Visit,
-    {
-        if self.stack_need <= SHORT_STACK {
-            self.traverse_with::<SHORT_STACK, F>(ray, t_min, t_max, any, visit)
-        } else {
-            self.traverse_with::<LONG_STACK, F>(ray, t_min, t_max, any, visit)
-        }
-    }
-
-    #[inline]
-    fn traverse_with<const STACK: usize, F>(
-        &self,
-        ray: &Ray,
-        t_min: Real,
-        mut t_max: Real,
-        any: bool,
-        mut visit: F,
-    ) -> bool
+    pub fn traverse<F>(&self, ray: &Ray, t_min: Real, t_max: Real, any: bool, mut visit: F) -> bool
     where
         F: FnMut(u32, Real) -> Visit,
     {
         if self.nodes.is_empty() {
             return false;
         }
-        let inv = Vec3::ONE / ray.d;
-        let o = [
-            Vec4::splat(ray.o.x),
-            Vec4::splat(ray.o.y),
-            Vec4::splat(ray.o.z),
-        ];
-        let inv_d = [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)];
-        let grow = 1.0 + 2.0 * gamma(3);
-        let mut stack = [Entry {
-            child: 0,
-            count: 0,
-            near: 0.0,
-        }; STACK];
-        let mut sp = 0usize;
-        let mut hit = false;
-        let (mut child, mut count) = (0u32, 0u8);
-        loop {
+        let mut w = Walk::new(ray, t_min, t_max);
+        if self.stack_need <= SHORT_STACK {
+            let mut stack = [NO_ENTRY; SHORT_STACK];
+            while w.step(&mut stack, &self.nodes, any, &mut visit, &|_, _| {}) {}
+        } else {
+            let mut stack = [NO_ENTRY; LONG_STACK];
+            while w.step(&mut stack, &self.nodes, any, &mut visit, &|_, _| {}) {}
+        }
+        w.hit
+    }
+
+    /// [`Bvh::traverse`] (closest hit) for up to [`BATCH`] rays at once. The rays are
+    /// walked in turn, one step each, and every step asks for the memory of the ray's
+    /// next step ahead of time (a prefetch: the next node, or through `leaf_ahead(first)`
+    /// the records of the next leaf). While one ray waits on memory the others work, so a
+    /// tree much larger than the cache costs fewer stalls. Each ray takes exactly the
+    /// steps it would take alone, so every result is the same as from
+    /// [`Bvh::traverse`]. `visit(r, i, t_max)` tests primitive `i` against `rays[r]`.
+    #[inline]
+    pub fn traverse_batch<F, L>(
+        &self,
+        rays: &[Ray],
+        t_min: Real,
+        t_max: &[Real],
+        mut visit: F,
+        leaf_ahead: L,
+    ) where
+        F: FnMut(usize, u32, Real) -> Visit,
+        L: Fn(u32),
+    {
+        assert!(rays.len() <= BATCH && rays.len() == t_max.len());
+        if self.nodes.is_empty() || rays.is_empty() {
+            return;
+        }
+        let ahead = |child: u32, count: u8| {
             if count == 0 {
-                let n = &self.nodes[child as usize];
-                let (near, mut mask) = n.hit(&o, &inv_d, t_min, t_max);
-                if mask != 0 {
-                    // The overlapped lanes, sorted nearest first (stable, so ties keep
-                    // lane order and the result never depends on anything else).
-                    let near = near.to_array();
-                    let mut lanes = [0usize; 4];
-                    let mut k = 0;
-                    while mask != 0 {
-                        let lane = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        let mut j = k;
-                        while j > 0 && near[lanes[j - 1]] > near[lane] {
-                            lanes[j] = lanes[j - 1];
-                            j -= 1;
-                        }
-                        lanes[j] = lane;
-                        k += 1;
-                    }
-                    for &lane in lanes[1..k].iter().rev() {
-                        stack[sp] = Entry {
-                            child: n.child[lane],
-                            count: n.count[lane],
-                            near: near[lane],
-                        };
-                        sp += 1;
-                    }
-                    (child, count) = (n.child[lanes[0]], n.count[lanes[0]]);
-                    continue;
-                }
+                prefetch(&self.nodes[child as usize]);
             } else {
-                for i in child..child + count as u32 {
-                    if let Visit::Hit(t) = visit(i, t_max) {
-                        hit = true;
-                        if any {
-                            return true;
-                        }
-                        t_max = t;
-                    }
-                }
+                leaf_ahead(child);
             }
-            // Pop the next child whose box the (possibly shrunk) interval still reaches.
-            loop {
-                if sp == 0 {
-                    return hit;
-                }
-                sp -= 1;
-                let e = stack[sp];
-                if e.near <= t_max * grow {
-                    (child, count) = (e.child, e.count);
-                    break;
+        };
+        if self.stack_need <= SHORT_STACK {
+            self.walk_batch::<SHORT_STACK>(rays, t_min, t_max, &mut visit, &ahead);
+        } else {
+            self.walk_batch::<LONG_STACK>(rays, t_min, t_max, &mut visit, &ahead);
+        }
+    }
+
+    #[inline]
+    fn walk_batch<const STACK: usize>(
+        &self,
+        rays: &[Ray],
+        t_min: Real,
+        t_max: &[Real],
+        visit: &mut impl FnMut(usize, u32, Real) -> Visit,
+        ahead: &impl Fn(u32, u8),
+    ) {
+        // Slots past the last ray start inactive and are never stepped.
+        let mut walks: [Walk; BATCH] = std::array::from_fn(|r| {
+            let k = r.min(rays.len() - 1);
+            Walk::new(&rays[k], t_min, t_max[k])
+        });
+        let mut stacks = [[NO_ENTRY; STACK]; BATCH];
+        let mut active: u32 = (1 << rays.len()) - 1;
+        while active != 0 {
+            for (r, (w, stack)) in walks.iter_mut().zip(stacks.iter_mut()).enumerate() {
+                if active & (1 << r) != 0
+                    && !w.step(stack, &self.nodes, false, &mut |i, t| visit(r, i, t), ahead)
+                {
+                    active &= !(1 << r);
                 }
             }
         }
+    }
+
+    /// Bytes of node memory, for statistics and for the owner's choice of
+    /// [`Bvh::traverse_batch`].
+    pub fn node_bytes(&self) -> usize {
+        std::mem::size_of_val(self.nodes.as_slice())
+    }
+}
+
+/// Rays [`Bvh::traverse_batch`] walks together. Measured on the 10⁶-sphere benchmark
+/// scene (renderer/docs/performance.md): 4 rays took 6.1 ms, 8 took 5.7 ms and 16 took
+/// 5.0 ms, against 10.1 ms one ray at a time, in one run.
+pub const BATCH: usize = 16;
+
+/// Asks the processor to start loading the cache line that holds `x`, without waiting for
+/// it. A hint only: it changes no value, only when memory arrives.
+#[inline(always)]
+pub fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `_mm_prefetch` reads nothing into the program and cannot fault (it is a
+    // hint, ignored for an invalid address), and the address comes from a live reference.
+    // SSE, which it needs, is part of the x86_64 baseline.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
+            (x as *const T).cast::<i8>(),
+        );
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
+/// One ray's traversal state, apart from its stack.
+#[derive(Clone, Copy)]
+struct Walk {
+    o: [Vec4; 3],
+    inv_d: [Vec4; 3],
+    t_min: Real,
+    t_max: Real,
+    /// The child to take next: an interior node (`count == 0`) or a leaf's slots.
+    child: u32,
+    count: u8,
+    hit: bool,
+    /// Entries on the stack.
+    sp: usize,
+}
+
+const NO_ENTRY: Entry = Entry {
+    child: 0,
+    count: 0,
+    near: 0.0,
+};
+
+impl Walk {
+    #[inline]
+    fn new(ray: &Ray, t_min: Real, t_max: Real) -> Self {
+        let inv = Vec3::ONE / ray.d;
+        Walk {
+            o: [
+                Vec4::splat(ray.o.x),
+                Vec4::splat(ray.o.y),
+                Vec4::splat(ray.o.z),
+            ],
+            inv_d: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
+            t_min,
+            t_max,
+            child: 0,
+            count: 0,
+            hit: false,
+            sp: 0,
+        }
+    }
+
+    /// Tests the current node or visits the current leaf, then moves to the next child
+    /// to take, and passes it to `ahead`. Returns false once the traversal is over.
+    #[inline(always)]
+    fn step<F>(
+        &mut self,
+        stack: &mut [Entry],
+        nodes: &[Node],
+        any: bool,
+        visit: &mut F,
+        ahead: &impl Fn(u32, u8),
+    ) -> bool
+    where
+        F: FnMut(u32, Real) -> Visit,
+    {
+        if self.count == 0 {
+            let n = &nodes[self.child as usize];
+            let (near, mut mask) = n.hit(&self.o, &self.inv_d, self.t_min, self.t_max);
+            if mask != 0 {
+                // The overlapped lanes, sorted nearest first (stable, so ties keep lane
+                // order and the result never depends on anything else).
+                let near = near.to_array();
+                let mut lanes = [0usize; 4];
+                let mut k = 0;
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let mut j = k;
+                    while j > 0 && near[lanes[j - 1]] > near[lane] {
+                        lanes[j] = lanes[j - 1];
+                        j -= 1;
+                    }
+                    lanes[j] = lane;
+                    k += 1;
+                }
+                for &lane in lanes[1..k].iter().rev() {
+                    stack[self.sp] = Entry {
+                        child: n.child[lane],
+                        count: n.count[lane],
+                        near: near[lane],
+                    };
+                    self.sp += 1;
+                }
+                (self.child, self.count) = (n.child[lanes[0]], n.count[lanes[0]]);
+                ahead(self.child, self.count);
+                return true;
+            }
+        } else {
+            for i in self.child..self.child + self.count as u32 {
+                if let Visit::Hit(t) = visit(i, self.t_max) {
+                    self.hit = true;
+                    if any {
+                        return false;
+                    }
+                    self.t_max = t;
+                }
+            }
+        }
+        // Pop the next child whose box the (possibly shrunk) interval still reaches.
+        let grow = 1.0 + 2.0 * gamma(3);
+        while self.sp > 0 {
+            self.sp -= 1;
+            let e = stack[self.sp];
+            if e.near <= self.t_max * grow {
+                (self.child, self.count) = (e.child, e.count);
+                ahead(self.child, self.count);
+                return true;
+            }
+        }
+        false
     }
 }
 

@@ -1,13 +1,18 @@
 //! The render loop: rows in parallel through rayon, each pixel independent, so the
 //! output is bit-identical for any thread count. Nothing here allocates per pixel.
 
+use crate::aggregate::Hit;
 use crate::physical::{Integrator, PhysicalIntegrator};
-use crate::real::{dvec3, Real};
+use crate::ray::Ray;
+use crate::real::{dvec3, Real, Vec3};
 use crate::sampler::PixelSampler;
 use crate::scene::{Color, Scene};
 use crate::shading::Shader;
 use crate::spawn::Spawn;
 use rayon::prelude::*;
+
+/// Camera samples traced together (a multiple of [`crate::bvh::BATCH`]).
+const CHUNK: usize = 64;
 
 /// Geometry channels for every pixel, from the pixel-centre ray. Misses are 0.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -105,52 +110,80 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
         .enumerate()
         .map(|(j, (row, mrow))| {
             let mut bad = 0;
-            for i in 0..w {
-                let pixel = (j * w + i) as u64;
-                let mut sum = Color::ZERO;
-                let mut sq = [0f64; 6];
-                for s in 0..spp {
-                    let mut smp = PixelSampler::new(kind, pixel, s, spp);
-                    // The classic model samples the pixel centre at 1 spp, as POV-Ray does
-                    // with antialiasing off; otherwise positions are uniform in the pixel
-                    // (a box filter, as Mitsuba's).
+            // The row's samples in order (pixel by pixel, sample by sample), in chunks:
+            // the classic model finds a chunk's camera hits together
+            // (Aggregate::intersect_many), then shades them one by one. Each pixel's
+            // sum runs over its samples in the same order as one at a time.
+            let mut rays = [Ray::new(Vec3::ZERO, Vec3::ONE); CHUNK];
+            let mut hits: [Option<Hit>; CHUNK] = [None; CHUNK];
+            let mut samplers: [Option<PixelSampler>; CHUNK] = std::array::from_fn(|_| None);
+            let mut sum = Color::ZERO;
+            let mut sq = [0f64; 6];
+            let total = w * spp as usize;
+            for start in (0..total).step_by(CHUNK) {
+                let n = CHUNK.min(total - start);
+                for k in 0..n {
+                    let (i, s) = (
+                        (start + k) / spp as usize,
+                        ((start + k) % spp as usize) as u32,
+                    );
+                    let mut smp = PixelSampler::new(kind, (j * w + i) as u64, s, spp);
+                    // The classic model samples the pixel centre at 1 spp, as POV-Ray
+                    // does with antialiasing off; otherwise positions are uniform in the
+                    // pixel (a box filter, as Mitsuba's).
                     let (dx, dy) = if classic && spp == 1 {
                         (0.5, 0.5)
                     } else {
                         smp.next_2d()
                     };
-                    let ray = scene.camera.ray_at(i as f64 + dx, j as f64 + dy);
-                    let c = if classic {
-                        shader.trace_primary(&ray)
-                    } else {
-                        physical.li(&ray, &mut smp)
+                    rays[k] = scene.camera.ray_at(i as f64 + dx, j as f64 + dy);
+                    samplers[k] = Some(smp);
+                }
+                if classic {
+                    scene
+                        .root
+                        .intersect_many(&rays[..n], 0.0, Real::INFINITY, &mut hits[..n]);
+                }
+                for k in 0..n {
+                    let (i, s) = (
+                        (start + k) / spp as usize,
+                        ((start + k) % spp as usize) as u32,
+                    );
+                    let c = match (classic, &mut samplers[k]) {
+                        (false, Some(smp)) => physical.li(&rays[k], smp),
+                        _ => shader.trace_primary_hit(&rays[k], hits[k]),
                     };
                     sum += c;
                     if !mrow.is_empty() {
                         let (r, g, b) = (c.x as f64, c.y as f64, c.z as f64);
-                        for (k, v) in [r * r, g * g, b * b, r * g, r * b, g * b]
+                        for (m, v) in [r * r, g * g, b * b, r * g, r * b, g * b]
                             .into_iter()
                             .enumerate()
                         {
-                            sq[k] += v;
+                            sq[m] += v;
                         }
                     }
-                }
-                if !mrow.is_empty() {
-                    for k in 0..6 {
-                        let v = (sq[k] / spp as f64) as f32;
-                        mrow[6 * i + k] = if v.is_finite() { v } else { 0.0 };
+                    if s + 1 < spp {
+                        continue;
                     }
-                }
-                let c = sum / spp as f32;
-                for k in 0..3 {
-                    let v = c[k];
-                    row[3 * i + k] = if v.is_finite() {
-                        v
-                    } else {
-                        bad += 1;
-                        0.0
-                    };
+                    // The pixel's last sample: write it out.
+                    if !mrow.is_empty() {
+                        for m in 0..6 {
+                            let v = (sq[m] / spp as f64) as f32;
+                            mrow[6 * i + m] = if v.is_finite() { v } else { 0.0 };
+                        }
+                    }
+                    let c = sum / spp as f32;
+                    for m in 0..3 {
+                        let v = c[m];
+                        row[3 * i + m] = if v.is_finite() {
+                            v
+                        } else {
+                            bad += 1;
+                            0.0
+                        };
+                    }
+                    (sum, sq) = (Color::ZERO, [0.0; 6]);
                 }
             }
             if let Some(b) = &bar {
@@ -183,9 +216,20 @@ fn fill_aov(scene: &Scene, a: &mut Aov, w: usize) {
         .zip(a.object_id.par_chunks_mut(w))
         .enumerate()
         .for_each(|(j, (((z, n), p), id))| {
+            let mut rays = [Ray::new(Vec3::ZERO, Vec3::ONE); CHUNK];
+            let mut hits: [Option<Hit>; CHUNK] = [None; CHUNK];
             for i in 0..w {
-                let ray = scene.camera.pixel_ray(i as u32, j as u32);
-                let Some(hit) = scene.root.intersect(&ray, 0.0, Real::INFINITY) else {
+                let k = i % CHUNK;
+                if k == 0 {
+                    let n = CHUNK.min(w - i);
+                    for (m, ray) in rays[..n].iter_mut().enumerate() {
+                        *ray = scene.camera.pixel_ray((i + m) as u32, j as u32);
+                    }
+                    scene
+                        .root
+                        .intersect_many(&rays[..n], 0.0, Real::INFINITY, &mut hits[..n]);
+                }
+                let Some(hit) = hits[k] else {
                     continue;
                 };
                 let hp = dvec3(hit.p);

@@ -89,6 +89,18 @@ impl<'a> Shader<'a> {
         self.trace(ray, 0.0, 0, 1.0, &mut Interiors::default())
     }
 
+    /// [`Shader::trace_primary`] given the ray's closest hit (from
+    /// [`crate::aggregate::Aggregate::intersect_many`], which finds many at once).
+    pub fn trace_primary_hit(&self, ray: &Ray, hit: Option<Hit>) -> Color {
+        if self.cut_off(0, 1.0) {
+            return Color::ZERO;
+        }
+        match hit {
+            None => self.scene.settings.background,
+            Some(hit) => self.shade(ray, &hit, 0, 1.0, &mut Interiors::default()),
+        }
+    }
+
     /// POV-Ray's TraceRay: black past the trace level or below the bailout weight, the
     /// background on a miss, else the lit surface colour.
     pub fn trace(
@@ -99,14 +111,19 @@ impl<'a> Shader<'a> {
         weight: f32,
         interiors: &mut Interiors,
     ) -> Color {
-        let s = &self.scene.settings;
-        if level >= s.max_depth || weight < s.adc_bailout {
+        if self.cut_off(level, weight) {
             return Color::ZERO;
         }
         match self.scene.root.intersect(ray, t_min, Real::INFINITY) {
-            None => s.background,
+            None => self.scene.settings.background,
             Some(hit) => self.shade(ray, &hit, level, weight, interiors),
         }
+    }
+
+    /// Whether a ray is past the trace level or below the bailout weight.
+    fn cut_off(&self, level: u32, weight: f32) -> bool {
+        let s = &self.scene.settings;
+        level >= s.max_depth || weight < s.adc_bailout
     }
 
     fn shade(

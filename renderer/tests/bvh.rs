@@ -485,22 +485,9 @@ fn compact_spheres_match_the_general_path_bit_for_bit() {
             let (r, t_min, t_max) = random_ray(&mut rng, &agg, extent);
             let bv = agg.intersect(&r, t_min, t_max);
             let bf = agg.intersect_brute_force(&r, t_min, t_max);
-            let bits = |h: &Option<Hit>| {
-                h.map(|h| {
-                    let v =
-                        [h.p, h.err, h.n_geo, h.n_shade].map(|v| v.to_array().map(|x| x.to_bits()));
-                    (
-                        h.t.to_bits(),
-                        v,
-                        h.uv.to_array().map(|x| x.to_bits()),
-                        h.material,
-                        h.object_id,
-                    )
-                })
-            };
             assert_eq!(
-                bits(&bv),
-                bits(&bf),
+                hit_bits(&bv),
+                hit_bits(&bf),
                 "scene {scene}, ray {i}: {r:?} [{t_min}, {t_max}]"
             );
             assert_eq!(
@@ -511,5 +498,54 @@ fn compact_spheres_match_the_general_path_bit_for_bit() {
             hits += bf.is_some() as usize;
         }
         assert!(hits > 400, "scene {scene}: only {hits} of 4000 rays hit");
+    }
+}
+
+/// The bits of a hit, every field.
+type HitBits = (u64, [[u64; 3]; 4], [u64; 2], u32, u32);
+
+fn hit_bits(h: &Option<Hit>) -> Option<HitBits> {
+    h.map(|h| {
+        let v = [h.p, h.err, h.n_geo, h.n_shade].map(|v| v.to_array().map(|x| x.to_bits() as u64));
+        (
+            h.t.to_bits() as u64,
+            v,
+            h.uv.to_array().map(|x| x.to_bits() as u64),
+            h.material,
+            h.object_id,
+        )
+    })
+}
+
+/// Camera rays go through `intersect_many`, which walks rays of a large tree interleaved.
+/// Each must get exactly the hit `intersect` gives it alone: same bits in every field,
+/// on a tree large enough to interleave (mixed shapes, a plane, nested groups) and on a
+/// small one that does not.
+#[test]
+fn interleaved_rays_match_one_at_a_time() {
+    let mut rng = SplitMix(77);
+    for (n, interleaved) in [(40_000, true), (300, false)] {
+        let (agg, extent) = random_scene(&mut rng, n, true);
+        assert_eq!(agg.interleaves(), interleaved, "n = {n}");
+        let mut hits = 0;
+        // Batches of odd sizes, each with its own interval.
+        for call in 0..150 {
+            let (_, t_min, t_max) = random_ray(&mut rng, &agg, extent);
+            let rays: Vec<Ray> = (0..1 + call % 37)
+                .map(|_| random_ray(&mut rng, &agg, extent).0)
+                .collect();
+            let mut out = vec![None; rays.len()];
+            agg.intersect_many(&rays, t_min, t_max, &mut out);
+            for (r, got) in rays.iter().zip(&out) {
+                let alone = agg.intersect(r, t_min, t_max);
+                assert_eq!(
+                    hit_bits(got),
+                    hit_bits(&alone),
+                    "n = {n}, call {call}: {r:?} [{t_min}, {t_max}]"
+                );
+                hits += alone.is_some() as usize;
+            }
+        }
+        assert!(hits > 300, "n = {n}: only {hits} rays hit");
     }
 }

@@ -5,6 +5,7 @@
 use glam::{DMat3, DVec3};
 use renderer::aggregate::{Aggregate, Instance};
 use renderer::camera::{Camera, FovAxis, ViewingModel};
+use renderer::ray::Ray;
 use renderer::real::{Real, Vec3};
 use renderer::shapes::{Mesh, Shape};
 use renderer::transform::{Affine64, Transform};
@@ -107,18 +108,19 @@ pub fn mesh(nu: usize, nv: usize) -> Mesh {
     Mesh::new(pos, None, None, tris).unwrap()
 }
 
-/// Traces every pixel-centre ray on this thread; returns the number of hits.
+/// Traces every pixel-centre ray on this thread, a row at a time through
+/// `Aggregate::intersect_many` as the renderer traces camera rays; returns the number of
+/// hits.
 pub fn trace_all(cam: &Camera, agg: &Aggregate) -> u32 {
-    let mut hits = 0;
+    let mut rays = [Ray::new(Vec3::ZERO, Vec3::ONE); RES as usize];
+    let mut hits = [None; RES as usize];
+    let mut count = 0;
     for j in 0..RES {
-        for i in 0..RES {
-            if agg
-                .intersect(&cam.pixel_ray(i, j), 0.0, Real::INFINITY)
-                .is_some()
-            {
-                hits += 1;
-            }
+        for (i, ray) in rays.iter_mut().enumerate() {
+            *ray = cam.pixel_ray(i as u32, j);
         }
+        agg.intersect_many(&rays, 0.0, Real::INFINITY, &mut hits);
+        count += hits.iter().filter(|h| h.is_some()).count() as u32;
     }
-    hits
+    count
 }
