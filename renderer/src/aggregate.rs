@@ -205,7 +205,8 @@ impl Lead {
     }
 }
 
-/// Tree size (BVH nodes plus leads, in bytes) above which [`Aggregate::intersect_many`]
+/// Size of an aggregate's own tree (its BVH nodes plus leads, in bytes; meshes and nested
+/// groups below it not counted) above which [`Aggregate::intersect_many`]
 /// interleaves rays. Below it the tree stays in the L2 cache (1 MiB per core on the
 /// development machine), and one ray at a time is faster: at 10⁴ spheres (0.5 MB)
 /// interleaving took 3.87 ms against 3.71 ms, at 10⁵ (5.4 MB) 4.67 ms against 7.11 ms.
@@ -340,8 +341,9 @@ impl Aggregate {
     /// `intersect(&rays[r], t_min, t_max)` returns. When the BVH and its records are
     /// larger than [`INTERLEAVE_ABOVE`], rays are walked [`BATCH`] at a time through
     /// [`Bvh::traverse_batch`], so that one ray's cache misses overlap the others' work;
-    /// a smaller tree stays in cache and is cheaper one ray at a time. Camera rays go
-    /// through here.
+    /// a smaller tree stays in cache and is cheaper one ray at a time. Only this tree's
+    /// walk is interleaved: the BVHs of meshes and nested groups below it are walked one
+    /// ray at a time. The classic integrator's camera rays and the AOVs go through here.
     pub fn intersect_many(&self, rays: &[Ray], t_min: Real, t_max: Real, out: &mut [Option<Hit>]) {
         assert_eq!(rays.len(), out.len(), "one output per ray");
         if !self.interleaves() {
@@ -361,7 +363,9 @@ impl Aggregate {
                 t_min,
                 &bound[..rays.len()],
                 |r, k, tmax| self.visit(k, &rays[r], t_min, tmax, &mut best[r]),
-                |k| prefetch(&self.leads[k as usize]),
+                |first, count| {
+                    prefetch(&self.leads[first as usize..first as usize + count as usize])
+                },
             );
             for (o, b) in out.iter_mut().zip(best) {
                 *o = b.map(|(k, h)| self.finish(k, h));

@@ -13,6 +13,7 @@ use rayon::prelude::*;
 
 /// Camera samples traced together (a multiple of [`crate::bvh::BATCH`]).
 const CHUNK: usize = 64;
+const _: () = assert!(CHUNK.is_multiple_of(crate::bvh::BATCH));
 
 /// Geometry channels for every pixel, from the pixel-centre ray. Misses are 0.
 #[derive(Clone, Debug, Default, PartialEq)]

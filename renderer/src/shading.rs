@@ -86,7 +86,7 @@ impl<'a> Shader<'a> {
 
     /// Radiance along a camera ray.
     pub fn trace_primary(&self, ray: &Ray) -> Color {
-        self.trace(ray, 0.0, 0, 1.0, &mut Interiors::default())
+        self.trace_primary_hit(ray, self.scene.root.intersect(ray, 0.0, Real::INFINITY))
     }
 
     /// [`Shader::trace_primary`] given the ray's closest hit (from
