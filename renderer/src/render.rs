@@ -121,13 +121,12 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
             let mut sum = Color::ZERO;
             let mut sq = [0f64; 6];
             let total = w * spp as usize;
+            // Sample `q` of the row: (pixel column, sample index).
+            let pixel_sample = |q: usize| (q / spp as usize, (q % spp as usize) as u32);
             for start in (0..total).step_by(CHUNK) {
                 let n = CHUNK.min(total - start);
                 for k in 0..n {
-                    let (i, s) = (
-                        (start + k) / spp as usize,
-                        ((start + k) % spp as usize) as u32,
-                    );
+                    let (i, s) = pixel_sample(start + k);
                     let mut smp = PixelSampler::new(kind, (j * w + i) as u64, s, spp);
                     // The classic model samples the pixel centre at 1 spp, as POV-Ray
                     // does with antialiasing off; otherwise positions are uniform in the
@@ -146,10 +145,7 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
                         .intersect_many(&rays[..n], 0.0, Real::INFINITY, &mut hits[..n]);
                 }
                 for k in 0..n {
-                    let (i, s) = (
-                        (start + k) / spp as usize,
-                        ((start + k) % spp as usize) as u32,
-                    );
+                    let (i, s) = pixel_sample(start + k);
                     let c = match (classic, &mut samplers[k]) {
                         (false, Some(smp)) => physical.li(&rays[k], smp),
                         _ => shader.trace_primary_hit(&rays[k], hits[k]),
