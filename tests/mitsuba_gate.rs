@@ -2,11 +2,12 @@
 //! radiance passes the statistical test against the `moment` references. The test is tight
 //! enough to catch a light 2 % too bright and a missing cosine term.
 
+use conformance::catalog::load;
 use conformance::catalog::{repo_root, scenes, Entry};
-use conformance::harness::{load, Verdict};
 use conformance::manifest::Manifest;
-use conformance::mitsuba_harness::{check_mitsuba, read_radiance, render_estimate, GATE_SPP};
-use conformance::stats::{radiance_test, Estimate, RadianceTest};
+use conformance::mitsuba::harness::{check_mitsuba, read_radiance, render_estimate, GATE_SPP};
+use conformance::mitsuba::stats::{radiance_test, Estimate, RadianceTest};
+use conformance::verdict::Verdict;
 use renderer::physical::Fault;
 use renderer::scene::Scene;
 
@@ -165,8 +166,8 @@ fn test05_a_missing_cosine_term_fails() {
 
 #[test]
 fn test06_geometry_catches_a_half_pixel_shift() {
-    use conformance::mitsuba_harness::{our_geometry, read_geometry};
-    use conformance::stats::geometry_test;
+    use conformance::mitsuba::harness::{our_geometry, read_geometry};
+    use conformance::mitsuba::stats::geometry_test;
     for name in ["mi_transformed", "mi_cornell"] {
         let m = manifest();
         let reference = read_geometry(

@@ -2,10 +2,12 @@
 //! stale reference is never a pass, and the comparison is tight enough to catch a
 //! half-pixel shift, a 1 % change in a light and a 1° rotation of one object.
 
+use conformance::catalog::load;
 use conformance::catalog::{repo_root, scenes, Entry};
-use conformance::compare::{compare, Comparison};
-use conformance::harness::{check_povray, load, read_reference, render_for_conformance, Verdict};
 use conformance::manifest::Manifest;
+use conformance::povray::compare::{compare, Comparison};
+use conformance::povray::harness::{check_povray, read_reference, render_for_conformance};
+use conformance::verdict::Verdict;
 use glam::DMat3;
 use renderer::aggregate::Aggregate;
 use renderer::camera::{Camera, Window};

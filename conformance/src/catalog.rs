@@ -1,6 +1,8 @@
 //! The scene catalog: data files in `conformance/scenes/<reference>/*.toml`, one feature
 //! each. The catalog for POV-Ray is written by `scripts/gen_catalog.py`.
 
+use anyhow::{Context, Result};
+use renderer::scene::Scene;
 use std::path::{Path, PathBuf};
 
 /// The repository root (the workspace holding this crate).
@@ -40,4 +42,20 @@ pub fn scenes(reference: &str, filter: &str) -> std::io::Result<Vec<Entry>> {
     }
     v.sort_by(|a, b| a.name.cmp(&b.name));
     Ok(v)
+}
+
+/// Loads a catalog scene and returns it with its text.
+pub fn load(entry: &Entry) -> Result<(Scene, String)> {
+    let text = std::fs::read_to_string(&entry.path)
+        .with_context(|| format!("reading {}", entry.path.display()))?;
+    let base = entry.path.parent().unwrap_or(std::path::Path::new("."));
+    let scene = Scene::from_str(&text, &entry.path, base)?;
+    Ok((scene, text))
+}
+
+/// A fresh scratch folder under the system temp dir for one reference run.
+pub fn scratch_dir(name: &str) -> Result<PathBuf> {
+    let d = std::env::temp_dir().join(format!("conformance-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d)?;
+    Ok(d)
 }

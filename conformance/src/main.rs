@@ -4,8 +4,9 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use conformance::catalog::{repo_root, scenes};
-use conformance::harness::{check_povray, Verdict};
 use conformance::manifest::Manifest;
+use conformance::povray::harness::check_povray;
+use conformance::verdict::Verdict;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -95,10 +96,10 @@ fn run() -> Result<ExitCode> {
             let mut mi = Vec::new();
             for e in scenes("mitsuba", &filter)? {
                 mi.push(
-                    conformance::mitsuba_harness::check_mitsuba(
+                    conformance::mitsuba::harness::check_mitsuba(
                         &e,
                         &manifest,
-                        conformance::mitsuba_harness::GATE_SPP,
+                        conformance::mitsuba::harness::GATE_SPP,
                         None,
                     )
                     .with_context(|| e.name.clone())?,
@@ -145,7 +146,7 @@ fn run() -> Result<ExitCode> {
             let entries = scenes("mitsuba", &filter)?;
             anyhow::ensure!(!entries.is_empty(), "no catalog scene matches '{filter}'");
             if check {
-                let bad = conformance::refgen::check_mitsuba_refs(&entries)?;
+                let bad = conformance::mitsuba::refgen::check(&entries)?;
                 if bad.is_empty() {
                     println!("{} Mitsuba reference(s) regenerated from scratch and consistent with the committed files", entries.len());
                     Ok(ExitCode::SUCCESS)
@@ -154,7 +155,7 @@ fn run() -> Result<ExitCode> {
                     Ok(ExitCode::from(1))
                 }
             } else {
-                conformance::refgen::regenerate_mitsuba(&entries, spp)?;
+                conformance::mitsuba::refgen::regenerate(&entries, spp)?;
                 Ok(ExitCode::SUCCESS)
             }
         }
@@ -162,7 +163,7 @@ fn run() -> Result<ExitCode> {
             let entries = scenes("povray", &filter)?;
             anyhow::ensure!(!entries.is_empty(), "no catalog scene matches '{filter}'");
             if check {
-                let bad = conformance::refgen::check(&entries)?;
+                let bad = conformance::povray::refgen::check(&entries)?;
                 if bad.is_empty() {
                     println!("{} reference(s) regenerated from scratch and identical to the committed files", entries.len());
                     Ok(ExitCode::SUCCESS)
@@ -171,7 +172,7 @@ fn run() -> Result<ExitCode> {
                     Ok(ExitCode::from(1))
                 }
             } else {
-                conformance::refgen::regenerate(&entries)?;
+                conformance::povray::refgen::regenerate(&entries)?;
                 Ok(ExitCode::SUCCESS)
             }
         }

@@ -1,9 +1,9 @@
 //! The report: for every scene, our image, the reference and a false-colour difference
 //! image, plus `index.html` showing them side by side with the metrics, and a text table.
 
-use crate::compare::{diff_image, SILHOUETTE_BUDGET};
-use crate::harness::Outcome;
-use crate::mitsuba_harness::MiOutcome;
+use crate::mitsuba::harness::MiOutcome;
+use crate::povray::compare::{diff_image, SILHOUETTE_BUDGET};
+use crate::povray::harness::Outcome;
 use anyhow::Result;
 use renderer::output::{to_rgb8, ToneMap};
 use renderer::render::Image;
@@ -59,7 +59,7 @@ pub fn table(outcomes: &[Outcome]) -> String {
         .unwrap();
     }
     let count = |v| outcomes.iter().filter(|o| o.verdict == v).count();
-    use crate::harness::Verdict::*;
+    use crate::verdict::Verdict::*;
     writeln!(
         s,
         "{} scenes: {} pass, {} fail, {} stale, {} missing",
@@ -111,7 +111,7 @@ pub fn mitsuba_table(outcomes: &[MiOutcome]) -> String {
     }
     let pass = outcomes
         .iter()
-        .filter(|o| o.verdict == crate::harness::Verdict::Pass)
+        .filter(|o| o.verdict == crate::verdict::Verdict::Pass)
         .count();
     writeln!(
         s,
@@ -128,7 +128,7 @@ pub fn mitsuba_table(outcomes: &[MiOutcome]) -> String {
 fn z_image(z: &[f64], alpha: f64) -> Vec<u8> {
     let mut out = Vec::with_capacity(z.len() * 3);
     for &v in z {
-        if crate::stats::p_value(v) <= alpha {
+        if crate::mitsuba::stats::p_value(v) <= alpha {
             out.extend_from_slice(&[230, 0, 0]);
         } else if v > 2.0 {
             out.extend_from_slice(&[255, 160, 0]);
@@ -146,7 +146,7 @@ fn begin_row(
     dir: &Path,
     scene: &str,
     ours: &Image,
-    verdict: crate::harness::Verdict,
+    verdict: crate::verdict::Verdict,
     reference: &str,
 ) -> Result<(std::path::PathBuf, String)> {
     let sub = dir.join(scene);
@@ -157,7 +157,7 @@ fn begin_row(
         ours.height,
         srgb(ours.width, ours.height, &ours.rgb),
     )?;
-    let class = if verdict == crate::harness::Verdict::Pass {
+    let class = if verdict == crate::verdict::Verdict::Pass {
         "pass"
     } else {
         "fail"
@@ -237,7 +237,7 @@ Geometry: pixel-centre distance and normal against Mitsuba's ray_intersect. See 
             let (w, h) = (o.ours.width, o.ours.height);
             if let (Some(r), Some(g), Some(rgb)) = (&o.radiance, &o.geometry, &o.reference_rgb) {
                 save_png(&sub.join("reference.png"), w, h, srgb(w, h, rgb))?;
-                let alpha = crate::stats::sidak_alpha((w * h) as usize);
+                let alpha = crate::mitsuba::stats::sidak_alpha((w * h) as usize);
                 save_png(&sub.join("z.png"), w, h, z_image(&r.z_max, alpha))?;
                 write!(
                     metrics,

@@ -2,8 +2,8 @@
 //! textures and interiors, declared definitions and meshes. A change to the exporter shows
 //! up here as a reviewable diff (and makes every reference stale through its export hash).
 
+use conformance::catalog::load;
 use conformance::catalog::scenes;
-use conformance::harness::load;
 
 fn sdl(name: &str) -> String {
     let e = scenes("povray", name)

@@ -5,10 +5,10 @@
 //! conformance/docs/tradeoff.svg, which the HTML report embeds. Run by scripts/tradeoff.sh.
 
 use anyhow::{Context, Result};
+use conformance::catalog::load;
 use conformance::catalog::{repo_root, scenes};
-use conformance::harness::load;
 use conformance::manifest::Manifest;
-use conformance::mitsuba_harness::read_radiance;
+use conformance::mitsuba::harness::read_radiance;
 use renderer::render::{render, Options};
 use renderer::sampler::SamplerKind;
 use std::fmt::Write;

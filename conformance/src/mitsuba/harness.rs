@@ -2,10 +2,11 @@
 //! Mitsuba's `ray_intersect`) and radiance (a statistical test against the `moment`
 //! integrator's mean and variance).
 
+use super::stats::{geometry_test, radiance_test, Estimate, Geometry, GeometryTest, RadianceTest};
+use crate::catalog::load;
 use crate::catalog::{repo_root, Entry};
-use crate::harness::{load, Verdict};
 use crate::manifest::{freshness, Freshness, Manifest};
-use crate::stats::{geometry_test, radiance_test, Estimate, Geometry, GeometryTest, RadianceTest};
+use crate::verdict::Verdict;
 use anyhow::{Context, Result};
 use renderer::output::read_exr;
 use renderer::physical::Fault;
@@ -122,7 +123,7 @@ pub fn read_radiance(path: &Path, spp: u32) -> Result<(Vec<f32>, Estimate)> {
 
 /// The XML whose hash a Mitsuba reference records.
 pub fn export_text(scene: &Scene, spp: u32) -> Result<String> {
-    let e = crate::mitsuba::export(scene, spp, true)?;
+    let e = super::export(scene, spp, true)?;
     let mut text = e.xml;
     for (name, obj) in e.meshes {
         text.push_str(&format!("\n<!-- {name} -->\n{obj}"));

@@ -1,35 +1,12 @@
-//! Running the catalog: render each scene, check its reference is fresh, compare.
+//! Running the POV-Ray catalog: render each scene, check its reference is fresh, compare.
 
-use crate::catalog::{repo_root, Entry};
-use crate::compare::{compare, Comparison};
+use super::compare::{compare, Comparison};
+use crate::catalog::{load, repo_root, Entry};
 use crate::manifest::{freshness, Freshness, Manifest};
+use crate::verdict::Verdict;
 use anyhow::{Context, Result};
 use renderer::render::{render, Image, Options};
 use renderer::scene::Scene;
-
-/// The outcome of one scene against one reference.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Verdict {
-    /// Within tolerance and silhouette budget.
-    Pass,
-    /// Outside tolerance or over budget.
-    Fail,
-    /// The reference was made from a different scene: never a pass.
-    Stale,
-    /// No reference.
-    Missing,
-}
-
-impl std::fmt::Display for Verdict {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Verdict::Pass => "pass",
-            Verdict::Fail => "FAIL",
-            Verdict::Stale => "STALE",
-            Verdict::Missing => "MISSING",
-        })
-    }
-}
 
 /// One row of the report.
 pub struct Outcome {
@@ -47,15 +24,6 @@ pub struct Outcome {
     pub reference_rgb: Option<Vec<f32>>,
     /// Seconds our render took.
     pub seconds: f64,
-}
-
-/// Loads a catalog scene and returns it with its text.
-pub fn load(entry: &Entry) -> Result<(Scene, String)> {
-    let text = std::fs::read_to_string(&entry.path)
-        .with_context(|| format!("reading {}", entry.path.display()))?;
-    let base = entry.path.parent().unwrap_or(std::path::Path::new("."));
-    let scene = Scene::from_str(&text, &entry.path, base)?;
-    Ok((scene, text))
 }
 
 /// Renders a scene the way the conformance suite does: pixel centres, every core.
@@ -83,7 +51,7 @@ pub fn read_reference(path: &std::path::Path) -> Result<(usize, usize, Vec<f32>)
 /// Checks one catalog scene against its POV-Ray reference.
 pub fn check_povray(entry: &Entry, manifest: &Manifest) -> Result<Outcome> {
     let (scene, text) = load(entry)?;
-    let sdl = crate::povray::export(&scene, &entry.name);
+    let sdl = super::export(&scene, &entry.name);
     let key = format!("povray/{}", entry.name);
     let fresh = freshness(
         manifest.reference.get(&key),

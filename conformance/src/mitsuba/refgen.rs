@@ -1,146 +1,13 @@
-//! Regenerating POV-Ray references: export each scene to SDL, render it with POV-Ray at
-//! pixel centres (`-A`) to a half-float EXR, and record the manifest entry.
+//! Regenerating Mitsuba references: export each scene to XML, render geometry (pixel-centre
+//! ray casts) and radiance (the `moment` integrator) with `scripts/mitsuba_refs.py`, and
+//! record the manifest entries.
 
-use crate::catalog::{repo_root, Entry};
-use crate::harness::{load, read_reference};
+use super::harness::{export_text, read_geometry, read_radiance};
+use crate::catalog::{load, repo_root, scratch_dir, Entry};
 use crate::manifest::{sha256, today, Manifest, Record};
 use anyhow::{bail, Context, Result};
 use std::path::Path;
 use std::process::Command;
-
-/// The POV-Ray version string, e.g. "3.7.0.10.unofficial".
-pub fn povray_version() -> Result<String> {
-    let out = Command::new("povray").arg("--version").output().context(
-        "cannot run povray (install it with scripts/regen-povray.sh, which uses apt-get)",
-    )?;
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    text.lines()
-        .find_map(|l| l.trim().strip_prefix("POV-Ray "))
-        .map(|v| v.trim().to_string())
-        .context("povray --version printed no version")
-}
-
-/// The POV-Ray command line for a scene (relative file names, run inside `dir`).
-pub fn povray_args(name: &str, width: u32, height: u32) -> Vec<String> {
-    vec![
-        format!("+I{name}.pov"),
-        format!("+O{name}.exr"),
-        "+FE".into(),
-        format!("+W{width}"),
-        format!("+H{height}"),
-        "-D".into(),
-        "-A".into(),
-        "+WT2".into(),
-        "-GA".into(),
-    ]
-}
-
-/// Renders one scene with POV-Ray into `out_dir/<name>.exr` and returns its record.
-pub fn render_povray(entry: &Entry, out_dir: &Path, version: &str) -> Result<Record> {
-    let (scene, text) = load(entry)?;
-    let sdl = crate::povray::export(&scene, &entry.name);
-    let work = tempdir(&entry.name)?;
-    std::fs::write(work.join(format!("{}.pov", entry.name)), &sdl)?;
-    let args = povray_args(&entry.name, scene.settings.width, scene.settings.height);
-    let out = Command::new("povray")
-        .args(&args)
-        .current_dir(&work)
-        .output()
-        .context("running povray")?;
-    let produced = work.join(format!("{}.exr", entry.name));
-    if !out.status.success() || !produced.exists() {
-        bail!(
-            "povray failed on {}:\n{}",
-            entry.name,
-            String::from_utf8_lossy(&out.stderr)
-                .lines()
-                .rev()
-                .take(20)
-                .collect::<Vec<_>>()
-                .join("\n")
-        );
-    }
-    std::fs::create_dir_all(out_dir)?;
-    std::fs::copy(&produced, out_dir.join(format!("{}.exr", entry.name)))?;
-    std::fs::remove_dir_all(&work).ok();
-    Ok(Record {
-        tool: "povray".into(),
-        version: version.into(),
-        command: format!("povray {}", args.join(" ")),
-        scene_hash: sha256(text.as_bytes()),
-        export_hash: sha256(sdl.as_bytes()),
-        date: today(),
-        file: format!("povray/{}.exr", entry.name),
-        spp: None,
-    })
-}
-
-fn tempdir(name: &str) -> Result<std::path::PathBuf> {
-    let d = std::env::temp_dir().join(format!("conformance-pov-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d)?;
-    Ok(d)
-}
-
-/// Regenerates the references of `entries` and updates the manifest.
-pub fn regenerate(entries: &[Entry]) -> Result<()> {
-    let version = povray_version()?;
-    let root = repo_root();
-    let manifest_path = root.join("references/manifest.toml");
-    let mut manifest = Manifest::load(&manifest_path)?;
-    for e in entries {
-        let rec = render_povray(e, &root.join("references/povray"), &version)?;
-        eprintln!("{:<32} {}", e.name, rec.command);
-        manifest.reference.insert(format!("povray/{}", e.name), rec);
-    }
-    manifest.save(&manifest_path)
-}
-
-/// Re-renders `entries` from scratch into a temporary folder and checks that the pixels
-/// equal the committed references exactly, and that the manifest records the same version
-/// and command. Returns the names that differ.
-pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
-    let version = povray_version()?;
-    let root = repo_root();
-    let manifest = Manifest::load(&root.join("references/manifest.toml"))?;
-    let tmp = tempdir("check")?;
-    let mut bad = Vec::new();
-    for e in entries {
-        let rec = render_povray(e, &tmp, &version)?;
-        let (_, _, fresh) = read_reference(&tmp.join(format!("{}.exr", e.name)))?;
-        let (_, _, committed) = read_reference(
-            &root
-                .join("references/povray")
-                .join(format!("{}.exr", e.name)),
-        )?;
-        let old = manifest.reference.get(&format!("povray/{}", e.name));
-        let same_record = old.is_some_and(|o| {
-            o.command == rec.command
-                && o.scene_hash == rec.scene_hash
-                && o.export_hash == rec.export_hash
-                && o.version == rec.version
-        });
-        let same_pixels = fresh.len() == committed.len()
-            && fresh
-                .iter()
-                .zip(&committed)
-                .all(|(a, b)| a.to_bits() == b.to_bits());
-        eprintln!(
-            "{:<32} pixels {} manifest {}",
-            e.name,
-            if same_pixels { "identical" } else { "DIFFER" },
-            if same_record { "matches" } else { "DIFFERS" }
-        );
-        if !(same_pixels && same_record) {
-            bad.push(e.name.clone());
-        }
-    }
-    std::fs::remove_dir_all(&tmp).ok();
-    Ok(bad)
-}
 
 /// The Mitsuba version, as the reference script reports it.
 pub fn mitsuba_version() -> Result<String> {
@@ -166,9 +33,9 @@ pub fn render_mitsuba(
     spp: u32,
 ) -> Result<(Record, Record)> {
     let (scene, text) = load(entry)?;
-    let export = crate::mitsuba::export(&scene, spp, true)?;
-    let hash_text = crate::mitsuba_harness::export_text(&scene, spp)?;
-    let work = tempdir(&format!("mi-{}", entry.name))?;
+    let export = super::export(&scene, spp, true)?;
+    let hash_text = export_text(&scene, spp)?;
+    let work = scratch_dir(&format!("mi-{}", entry.name))?;
     let xml = work.join(format!("{}.xml", entry.name));
     export.write(&xml)?;
     let script = repo_root().join("scripts/mitsuba_refs.py");
@@ -224,7 +91,7 @@ pub fn render_mitsuba(
 }
 
 /// Regenerates the Mitsuba references of `entries` at `spp` and updates the manifest.
-pub fn regenerate_mitsuba(entries: &[Entry], spp: u32) -> Result<()> {
+pub fn regenerate(entries: &[Entry], spp: u32) -> Result<()> {
     let version = mitsuba_version()?;
     let root = repo_root();
     let manifest_path = root.join("references/manifest.toml");
@@ -253,12 +120,11 @@ pub fn regenerate_mitsuba(entries: &[Entry], spp: u32) -> Result<()> {
 /// bit for bit, radiance by the statistical test against the committed reference (Mitsuba
 /// seeds per render block, so its bits depend on the thread count). Returns the names
 /// that differ.
-pub fn check_mitsuba_refs(entries: &[Entry]) -> Result<Vec<String>> {
-    use crate::mitsuba_harness::{read_geometry, read_radiance};
+pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
     let version = mitsuba_version()?;
     let root = repo_root();
     let manifest = Manifest::load(&root.join("references/manifest.toml"))?;
-    let tmp = tempdir("mi-check")?;
+    let tmp = scratch_dir("mi-check")?;
     let mut bad = Vec::new();
     for e in entries {
         let old = manifest
@@ -273,7 +139,7 @@ pub fn check_mitsuba_refs(entries: &[Entry]) -> Result<Vec<String>> {
         let same_geometry = g_new.z == g_old.z && g_new.n == g_old.n && g_new.hit == g_old.hit;
         let (_, r_new) = read_radiance(&tmp.join(format!("{}.exr", e.name)), spp)?;
         let (_, r_old) = read_radiance(&committed.join(format!("{}.exr", e.name)), spp)?;
-        let stat = crate::stats::radiance_test(&r_new, &r_old);
+        let stat = super::stats::radiance_test(&r_new, &r_old);
         let old_geo = manifest
             .reference
             .get(&format!("mitsuba-geometry/{}", e.name));

@@ -291,7 +291,7 @@ pub fn geometry_test(a: &Geometry, b: &Geometry) -> GeometryTest {
         max_normal_degrees: max_deg,
         silhouette,
         failing,
-        budget: ((w * h) as f64 * crate::compare::SILHOUETTE_BUDGET).floor() as usize,
+        budget: ((w * h) as f64 * crate::povray::compare::SILHOUETTE_BUDGET).floor() as usize,
     }
 }
 
