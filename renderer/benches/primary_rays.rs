@@ -15,8 +15,8 @@
 //! Each iteration traces the pixel-centre rays of a 128×128 camera on one thread.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use renderer::aggregate::Shape;
 use renderer::aggregate::{Aggregate, Instance};
-use renderer::shapes::Shape;
 use std::sync::Arc;
 
 mod common;

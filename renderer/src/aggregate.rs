@@ -1,5 +1,10 @@
 //! Instances and aggregates: the two-level (or deeper) acceleration structure.
 //!
+//! [`Shape`] is what an instance places: a canonical primitive (`crate::shapes`), a mesh,
+//! or a whole named definition (an aggregate of its own). It lives here, with the
+//! aggregate, because a definition is both: so the shapes depend only on the hit record,
+//! and this module on the shapes, one way.
+//!
 //! An [`Instance`] is a shape with an optional affine transform. It maps the ray into object
 //! space by the inverse, without renormalizing the direction (so `t` is the same in both
 //! spaces), and maps the hit's normals back by `M⁻ᵀ`. An [`Aggregate`] holds instances under
@@ -9,61 +14,104 @@
 
 use crate::aabb::Aabb;
 use crate::bvh::{prefetch, Bvh, Visit, BATCH};
+pub use crate::hit::{Hit, INHERIT};
 use crate::ray::Ray;
-use crate::real::{Mat3, Real, Vec2, Vec3};
-use crate::shapes::Shape;
+use crate::real::{Mat3, Real, Vec3};
+use crate::shapes::{self, Mesh, Triangle};
 use crate::transform::{map_normal, map_point_with_error, Transform};
+use std::sync::Arc;
 
-/// Marks a hit whose material or object id comes from the enclosing instance.
-pub const INHERIT: u32 = u32::MAX;
-
-/// A hit record in the space of whoever returned it.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit {
-    /// Ray parameter.
-    pub t: Real,
-    /// Hit point (re-projected onto the surface where the shape can).
-    pub p: Vec3,
-    /// Per-component bound on the rounding error of `p`.
-    pub err: Vec3,
-    /// Outward geometric normal (not normalized).
-    pub n_geo: Vec3,
-    /// Shading normal (not normalized).
-    pub n_shade: Vec3,
-    /// Surface parameterisation.
-    pub uv: Vec2,
-    /// Material index, or [`INHERIT`].
-    pub material: u32,
-    /// 1-based object id, or 0 while unassigned.
-    pub object_id: u32,
+/// A primitive or a shared sub-scene, in its own object space.
+#[derive(Clone, Debug)]
+pub enum Shape {
+    /// Unit sphere.
+    Sphere,
+    /// The plane y = 0.
+    Plane,
+    /// The cube [−1, 1]³.
+    Cube,
+    /// Cylinder of radius 1, y ∈ [−1, 1].
+    Cylinder {
+        /// Whether the end disks are part of the surface.
+        capped: bool,
+    },
+    /// Cone with apex (0, 1, 0) and base radius 1 at y = −1.
+    Cone {
+        /// Whether the base disk is part of the surface.
+        capped: bool,
+    },
+    /// Unit disk in y = 0.
+    Disk,
+    /// [−1, 1]² in y = 0.
+    Rectangle,
+    /// A single triangle.
+    Triangle(Box<Triangle>),
+    /// A triangle mesh, shared by every instance that uses it.
+    Mesh(Arc<Mesh>),
+    /// A named definition (a sub-scene with its own BVH), shared by every instance.
+    Group(Arc<Aggregate>),
 }
 
-impl Hit {
-    /// A bare hit: material and object id unassigned.
-    #[inline]
-    pub fn new(t: Real, p: Vec3, err: Vec3, n_geo: Vec3, n_shade: Vec3, uv: Vec2) -> Self {
-        Hit {
-            t,
-            p,
-            err,
-            n_geo,
-            n_shade,
-            uv,
-            material: INHERIT,
-            object_id: 0,
+impl Shape {
+    /// Bounds in object space (infinite for the plane).
+    pub fn bounds(&self) -> Aabb {
+        let unit = Aabb {
+            min: Vec3::splat(-1.0),
+            max: Vec3::splat(1.0),
+        };
+        match self {
+            Shape::Sphere | Shape::Cube | Shape::Cylinder { .. } | Shape::Cone { .. } => unit,
+            Shape::Plane => Aabb {
+                min: Vec3::splat(Real::NEG_INFINITY),
+                max: Vec3::splat(Real::INFINITY),
+            },
+            Shape::Disk | Shape::Rectangle => Aabb {
+                min: Vec3::new(-1.0, 0.0, -1.0),
+                max: Vec3::new(1.0, 0.0, 1.0),
+            },
+            Shape::Triangle(t) => t.bounds(),
+            Shape::Mesh(m) => m.bounds(),
+            Shape::Group(g) => g.bounds(),
         }
     }
 
-    /// Fills in the material and object id still unassigned, from an enclosing instance.
+    /// The closest hit with `t_min < t < t_max`, in object space.
     #[inline]
-    fn inherit(mut self, material: u32, object_id: u32) -> Hit {
-        if self.material == INHERIT {
-            self.material = material;
+    pub fn intersect(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+        match self {
+            Shape::Sphere => shapes::sphere::intersect(ray, t_min, t_max),
+            Shape::Plane => shapes::flat::plane(ray, t_min, t_max),
+            Shape::Cube => shapes::cube::intersect(ray, t_min, t_max),
+            Shape::Cylinder { capped } => shapes::cylinder::intersect(ray, *capped, t_min, t_max),
+            Shape::Cone { capped } => shapes::cone::intersect(ray, *capped, t_min, t_max),
+            Shape::Disk => shapes::flat::disk(ray, t_min, t_max),
+            Shape::Rectangle => shapes::flat::rectangle(ray, t_min, t_max),
+            Shape::Triangle(t) => t.intersect(ray, t_min, t_max),
+            Shape::Mesh(m) => m.intersect(ray, t_min, t_max),
+            Shape::Group(g) => g.intersect(ray, t_min, t_max),
         }
-        if self.object_id == 0 {
-            self.object_id = object_id;
+    }
+
+    /// Whether anything is hit with `t_min < t < t_max` (shadow rays).
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
+        match self {
+            Shape::Mesh(m) => m.occluded(ray, t_min, t_max),
+            Shape::Group(g) => g.occluded(ray, t_min, t_max),
+            _ => self.intersect(ray, t_min, t_max).is_some(),
         }
-        self
+    }
+
+    /// Whether the shape is a closed convex solid (a spawned ray leaving it outward can
+    /// never hit it again).
+    pub fn is_convex_solid(&self) -> bool {
+        matches!(
+            self,
+            Shape::Sphere
+                | Shape::Cube
+                | Shape::Cylinder { capped: true }
+                | Shape::Cone { capped: true }
+        )
     }
 }
 

@@ -1,11 +1,12 @@
 //! The render loop: rows in parallel through rayon, each pixel independent, so the
 //! output is bit-identical for any thread count. Nothing here allocates per pixel.
 
-use crate::aggregate::Hit;
-use crate::physical::{Integrator, PhysicalIntegrator};
+use crate::hit::Hit;
+use crate::physical::PhysicalIntegrator;
 use crate::ray::Ray;
 use crate::real::{dvec3, Real, Vec3};
 use crate::sampler::PixelSampler;
+use crate::scene::Integrator;
 use crate::scene::{Color, Scene};
 use crate::shading::Shader;
 use crate::spawn::Spawn;

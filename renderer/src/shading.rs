@@ -15,7 +15,7 @@
 //! `Trace` returns black once the trace level reaches `max_depth` or the ray weight drops
 //! below `adc_bailout`, and the background on a miss.
 
-use crate::aggregate::Hit;
+use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{Real, Vec3};
 use crate::scene::{Color, Scene};

@@ -3,8 +3,9 @@
 //! per-mesh BVH) against testing every triangle on its own.
 
 use glam::{DMat3, DQuat, DVec3};
+use renderer::aggregate::Shape;
 use renderer::real::{dvec3, vec3};
-use renderer::shapes::{Mesh, Shape, Triangle};
+use renderer::shapes::{Mesh, Triangle};
 use renderer::{Affine64, Aggregate, Hit, Instance, Ray, Real, Transform, Vec3};
 use std::sync::Arc;
 

@@ -8,10 +8,11 @@
 
 use glam::{DMat3, DVec3};
 use renderer::aggregate::Aggregate;
+use renderer::aggregate::Shape;
 use renderer::real::{dvec3, vec3};
 use renderer::render::{render, Image, Options};
 use renderer::scene::Scene;
-use renderer::shapes::{Mesh, Shape};
+use renderer::shapes::Mesh;
 use renderer::spawn::Spawn;
 use renderer::transform::TransformError;
 use renderer::{Affine64, Hit, Instance, Ray, Real, Transform, Vec3};

@@ -3,9 +3,10 @@
 //! value is computed independently in f64, directly in world space.
 
 use glam::{DMat3, DVec3};
+use renderer::aggregate::Shape;
 use renderer::aggregate::INHERIT;
 use renderer::real::{dvec3, vec3, Vec2};
-use renderer::shapes::{Mesh, Shape, Triangle};
+use renderer::shapes::{Mesh, Triangle};
 use renderer::transform::TransformError;
 use renderer::{Affine64, Aggregate, Hit, Instance, Ray, Real, Transform, Vec3};
 use std::sync::Arc;

@@ -8,8 +8,9 @@
 //! by 3, that the interval `(t_min, t_max)` is honoured, and that `occluded` agrees.
 
 use glam::{DVec2, DVec3};
+use renderer::aggregate::Shape;
 use renderer::real::{dvec3, vec3, Vec2};
-use renderer::shapes::{Mesh, Shape, Triangle};
+use renderer::shapes::{Mesh, Triangle};
 use renderer::{Hit, Ray, Real, Vec3};
 use std::f64::consts::PI;
 use std::sync::Arc;

@@ -4,9 +4,10 @@
 //! plain way, one sample at a time, and the image and its second moments must match bit
 //! for bit, with sample counts that split pixels across chunks.
 
-use renderer::physical::{Integrator, PhysicalIntegrator};
+use renderer::physical::PhysicalIntegrator;
 use renderer::render::{render, Options};
 use renderer::sampler::PixelSampler;
+use renderer::scene::Integrator;
 use renderer::scene::{Color, Scene};
 use renderer::shading::Shader;
 use std::path::Path;

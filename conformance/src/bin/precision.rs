@@ -4,12 +4,12 @@
 //! renderer/docs/precision.md.
 
 use glam::{DMat3, DVec3};
+use renderer::aggregate::Shape;
 use renderer::aggregate::{Aggregate, Instance};
 use renderer::camera::{Camera, FovAxis, ViewingModel};
 use renderer::real::{dvec3, Real, PRECISION};
 use renderer::render::{render, Options};
 use renderer::scene::Scene;
-use renderer::shapes::Shape;
 use renderer::spawn::Spawn;
 use renderer::transform::{Affine64, Transform};
 use std::time::Instant;

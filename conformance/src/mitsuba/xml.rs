@@ -23,11 +23,12 @@
 //! affine map.
 
 use glam::{DMat3, DMat4, DVec3};
+use renderer::aggregate::Shape;
 use renderer::aggregate::{Aggregate, Instance};
-use renderer::physical::Integrator;
 use renderer::real::dvec3;
+use renderer::scene::Integrator;
 use renderer::scene::{Color, LightKind, Material, MaterialModel, Scene};
-use renderer::shapes::{Mesh, Shape};
+use renderer::shapes::Mesh;
 use renderer::transform::Affine64;
 use std::fmt::Write;
 use std::path::Path;

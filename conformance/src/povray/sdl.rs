@@ -19,10 +19,10 @@
 //! | mesh | `mesh2` (declared once) |
 //! | definition | `union` (declared once), placed with `object` |
 
+use renderer::aggregate::Shape;
 use renderer::aggregate::{Aggregate, Instance, INHERIT};
 use renderer::real::Real;
 use renderer::scene::{Color, Material, Scene};
-use renderer::shapes::Shape;
 use renderer::transform::Transform;
 use std::collections::HashMap;
 use std::fmt::Write;

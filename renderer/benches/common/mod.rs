@@ -3,11 +3,12 @@
 #![allow(dead_code)]
 
 use glam::{DMat3, DVec3};
+use renderer::aggregate::Shape;
 use renderer::aggregate::{Aggregate, Instance};
 use renderer::camera::{Camera, FovAxis, ViewingModel};
 use renderer::ray::Ray;
 use renderer::real::{Real, Vec3};
-use renderer::shapes::{Mesh, Shape};
+use renderer::shapes::Mesh;
 use renderer::transform::{Affine64, Transform};
 
 /// Image side: every iteration traces RES × RES pixel-centre rays.

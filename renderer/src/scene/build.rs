@@ -6,13 +6,14 @@
 //! so a definition instanced many times is stored once. Meshes are loaded once per file.
 
 use super::error::{SceneError, Source};
-use super::format::{self, CameraDesc, LightKind, NodeDesc, NodeKind, ScaleArg, TransformOp, V3};
-use super::{Color, Light, Material, MaterialModel, Scene, Settings};
+use super::format::{self, CameraDesc, NodeDesc, NodeKind, ScaleArg, TransformOp, V3};
+use super::{Color, Integrator, Light, LightKind, Material, MaterialModel, Scene, Settings};
+use crate::aggregate::Shape;
 use crate::aggregate::{Aggregate, Instance, INHERIT};
 use crate::camera::{Camera, CameraError, ViewingModel, Window};
-use crate::physical::{AreaLight, Integrator};
+use crate::light::AreaLight;
 use crate::real::{vec3, Real, Vec2};
-use crate::shapes::{Mesh, Shape, Triangle};
+use crate::shapes::{Mesh, Triangle};
 use crate::transform::{Affine64, Transform};
 use glam::{DMat3, DVec3};
 use std::collections::{BTreeMap, HashMap, HashSet};
@@ -625,5 +626,25 @@ impl Builder<'_> {
             }
         }
         Ok(())
+    }
+}
+
+impl Scene {
+    /// Reads and builds a scene file.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: path.display().to_string(),
+            line: 0,
+            column: 0,
+            field: "(file)".into(),
+            message: format!("cannot read: {e}"),
+        })?;
+        let base = path.parent().unwrap_or(Path::new("."));
+        Scene::from_str(&text, path, base)
+    }
+
+    /// Builds a scene from text. `file` names it in errors; meshes resolve against `base`.
+    pub fn from_str(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> {
+        build(text, file, base)
     }
 }

@@ -117,7 +117,7 @@ pub struct RenderDesc {
     pub ambient_light: V3,
     /// Light transport: POV-Ray's classic model, or Mitsuba's `direct` or `path`.
     #[serde(default)]
-    pub integrator: crate::physical::Integrator,
+    pub integrator: super::settings::Integrator,
     /// Path integrator: depth from which Russian roulette starts.
     #[serde(default = "five")]
     pub rr_depth: u32,
@@ -139,26 +139,13 @@ fn white() -> V3 {
     [1.0; 3]
 }
 
-/// Kinds of light.
-#[derive(Debug, Deserialize, Clone, Copy, PartialEq, Eq, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum LightKind {
-    /// A point light at `position`.
-    #[default]
-    Point,
-    /// A directional light travelling along `direction`.
-    Directional,
-    /// A constant environment around the scene.
-    Environment,
-}
-
 /// A light.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
     /// Kind of light.
     #[serde(rename = "type", default)]
-    pub kind: LightKind,
+    pub kind: crate::light::LightKind,
     /// Point lights: position.
     pub position: Option<V3>,
     /// Directional lights: the direction the light travels.
@@ -180,7 +167,7 @@ pub struct LightDesc {
 pub struct MaterialDesc {
     /// `classic` (POV-Ray finish), `diffuse`, `conductor` or `dielectric`.
     #[serde(default)]
-    pub model: crate::scene::MaterialModel,
+    pub model: crate::material::MaterialModel,
     /// Emitted radiance (physical integrators): makes a sphere or rectangle an area light.
     pub radiance: Option<V3>,
     /// Pigment colour.

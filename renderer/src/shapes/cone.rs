@@ -2,7 +2,7 @@
 //! k = ½, for y ∈ [−1, 1], and an optional base cap.
 
 use super::{azimuth, local_hit};
-use crate::aggregate::Hit;
+use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{gamma, Real, Vec2, Vec3};
 

@@ -2,7 +2,7 @@
 //! through (or leaves through, when it starts inside).
 
 use super::local_hit;
-use crate::aggregate::Hit;
+use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{gamma, Real, Vec2, Vec3};
 

@@ -2,7 +2,7 @@
 //! the same stable quadratic as the sphere, in the xz plane.
 
 use super::{azimuth, local_hit, stable_roots};
-use crate::aggregate::Hit;
+use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{gamma, Real, Vec2, Vec3};
 

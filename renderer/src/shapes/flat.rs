@@ -2,7 +2,7 @@
 //! disk and the rectangle [−1, 1]². A ray parallel to the plane never hits it.
 
 use super::local_hit;
-use crate::aggregate::Hit;
+use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{gamma, Real, Vec2, Vec3};
 

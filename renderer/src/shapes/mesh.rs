@@ -3,8 +3,8 @@
 
 use super::triangle::{surface, WoopRay};
 use crate::aabb::Aabb;
-use crate::aggregate::Hit;
 use crate::bvh::{Bvh, Visit};
+use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{Real, Vec2, Vec3};
 

@@ -1,5 +1,7 @@
-//! Canonical primitives in normalized object space. Shapes never see a transform: an
-//! [`Instance`](crate::aggregate::Instance) maps the ray in and the hit out.
+//! Canonical primitives in normalized object space, one file per family. Shapes never see
+//! a transform: an [`Instance`](crate::aggregate::Instance) maps the ray in and the hit
+//! out. They depend only on the hit record; the [`Shape`](crate::aggregate::Shape) enum
+//! that dispatches to them (and that can hold a whole sub-scene) lives with the aggregate.
 //!
 //! | shape | object space |
 //! |---|---|
@@ -16,121 +18,24 @@
 //! Every hit returns t, the outward geometric normal (not normalized; the normal of the
 //! face the ray hit, even from inside), a shading normal and uv.
 
-mod cone;
-mod cube;
-mod cylinder;
-mod flat;
+pub(crate) mod cone;
+pub(crate) mod cube;
+pub(crate) mod cylinder;
+pub(crate) mod flat;
 pub mod mesh;
-mod sphere;
+pub(crate) mod sphere;
 pub mod triangle;
 
-use crate::aabb::Aabb;
-use crate::aggregate::{Aggregate, Hit};
-use crate::ray::Ray;
+use crate::hit::Hit;
 use crate::real::{Real, Vec2, Vec3};
-use std::sync::Arc;
 
 pub use mesh::Mesh;
 pub use triangle::Triangle;
-
-/// A primitive or a shared sub-scene, in its own object space.
-#[derive(Clone, Debug)]
-pub enum Shape {
-    /// Unit sphere.
-    Sphere,
-    /// The plane y = 0.
-    Plane,
-    /// The cube [−1, 1]³.
-    Cube,
-    /// Cylinder of radius 1, y ∈ [−1, 1].
-    Cylinder {
-        /// Whether the end disks are part of the surface.
-        capped: bool,
-    },
-    /// Cone with apex (0, 1, 0) and base radius 1 at y = −1.
-    Cone {
-        /// Whether the base disk is part of the surface.
-        capped: bool,
-    },
-    /// Unit disk in y = 0.
-    Disk,
-    /// [−1, 1]² in y = 0.
-    Rectangle,
-    /// A single triangle.
-    Triangle(Box<Triangle>),
-    /// A triangle mesh, shared by every instance that uses it.
-    Mesh(Arc<Mesh>),
-    /// A named definition (a sub-scene with its own BVH), shared by every instance.
-    Group(Arc<Aggregate>),
-}
 
 /// A hit in a shape's object space, with the point's error bound and one normal.
 #[inline]
 pub(crate) fn local_hit(t: Real, p: Vec3, err: Vec3, n: Vec3, uv: Vec2) -> Hit {
     Hit::new(t, p, err, n, n, uv)
-}
-
-impl Shape {
-    /// Bounds in object space (infinite for the plane).
-    pub fn bounds(&self) -> Aabb {
-        let unit = Aabb {
-            min: Vec3::splat(-1.0),
-            max: Vec3::splat(1.0),
-        };
-        match self {
-            Shape::Sphere | Shape::Cube | Shape::Cylinder { .. } | Shape::Cone { .. } => unit,
-            Shape::Plane => Aabb {
-                min: Vec3::splat(Real::NEG_INFINITY),
-                max: Vec3::splat(Real::INFINITY),
-            },
-            Shape::Disk | Shape::Rectangle => Aabb {
-                min: Vec3::new(-1.0, 0.0, -1.0),
-                max: Vec3::new(1.0, 0.0, 1.0),
-            },
-            Shape::Triangle(t) => t.bounds(),
-            Shape::Mesh(m) => m.bounds(),
-            Shape::Group(g) => g.bounds(),
-        }
-    }
-
-    /// The closest hit with `t_min < t < t_max`, in object space.
-    #[inline]
-    pub fn intersect(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
-        match self {
-            Shape::Sphere => sphere::intersect(ray, t_min, t_max),
-            Shape::Plane => flat::plane(ray, t_min, t_max),
-            Shape::Cube => cube::intersect(ray, t_min, t_max),
-            Shape::Cylinder { capped } => cylinder::intersect(ray, *capped, t_min, t_max),
-            Shape::Cone { capped } => cone::intersect(ray, *capped, t_min, t_max),
-            Shape::Disk => flat::disk(ray, t_min, t_max),
-            Shape::Rectangle => flat::rectangle(ray, t_min, t_max),
-            Shape::Triangle(t) => t.intersect(ray, t_min, t_max),
-            Shape::Mesh(m) => m.intersect(ray, t_min, t_max),
-            Shape::Group(g) => g.intersect(ray, t_min, t_max),
-        }
-    }
-
-    /// Whether anything is hit with `t_min < t < t_max` (shadow rays).
-    #[inline]
-    pub fn occluded(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
-        match self {
-            Shape::Mesh(m) => m.occluded(ray, t_min, t_max),
-            Shape::Group(g) => g.occluded(ray, t_min, t_max),
-            _ => self.intersect(ray, t_min, t_max).is_some(),
-        }
-    }
-
-    /// Whether the shape is a closed convex solid (a spawned ray leaving it outward can
-    /// never hit it again).
-    pub fn is_convex_solid(&self) -> bool {
-        matches!(
-            self,
-            Shape::Sphere
-                | Shape::Cube
-                | Shape::Cylinder { capped: true }
-                | Shape::Cone { capped: true }
-        )
-    }
 }
 
 /// Roots of `a·t² + 2·b·t + c = 0`, given `disc = b² − a·c ≥ 0` and `a > 0`, in

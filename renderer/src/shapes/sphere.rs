@@ -3,7 +3,7 @@
 //! Tracing Gems, ch. 7), which stays exact far from the sphere.
 
 use super::{azimuth, local_hit, stable_roots};
-use crate::aggregate::Hit;
+use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{dvec3, gamma, vec3, Real, Vec2};
 

@@ -5,7 +5,7 @@
 //! (or both, at the same t), never neither.
 
 use crate::aabb::Aabb;
-use crate::aggregate::Hit;
+use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{gamma, Real, Vec2, Vec3};
 

@@ -1,0 +1,58 @@
+//! The hit record (pbrt's surface interaction): what a shape reports about where a ray met
+//! it. Shapes produce it, instances and aggregates map it to their space, and the
+//! integrators read it. It depends on nothing but the precision types.
+
+use crate::real::{Real, Vec2, Vec3};
+
+/// Marks a hit whose material or object id comes from the enclosing instance.
+pub const INHERIT: u32 = u32::MAX;
+
+/// A hit record in the space of whoever returned it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter.
+    pub t: Real,
+    /// Hit point (re-projected onto the surface where the shape can).
+    pub p: Vec3,
+    /// Per-component bound on the rounding error of `p`.
+    pub err: Vec3,
+    /// Outward geometric normal (not normalized).
+    pub n_geo: Vec3,
+    /// Shading normal (not normalized).
+    pub n_shade: Vec3,
+    /// Surface parameterisation.
+    pub uv: Vec2,
+    /// Material index, or [`INHERIT`].
+    pub material: u32,
+    /// 1-based object id, or 0 while unassigned.
+    pub object_id: u32,
+}
+
+impl Hit {
+    /// A bare hit: material and object id unassigned.
+    #[inline]
+    pub fn new(t: Real, p: Vec3, err: Vec3, n_geo: Vec3, n_shade: Vec3, uv: Vec2) -> Self {
+        Hit {
+            t,
+            p,
+            err,
+            n_geo,
+            n_shade,
+            uv,
+            material: INHERIT,
+            object_id: 0,
+        }
+    }
+
+    /// Fills in the material and object id still unassigned, from an enclosing instance.
+    #[inline]
+    pub(crate) fn inherit(mut self, material: u32, object_id: u32) -> Hit {
+        if self.material == INHERIT {
+            self.material = material;
+        }
+        if self.object_id == 0 {
+            self.object_id = object_id;
+        }
+        self
+    }
+}
