@@ -328,6 +328,7 @@ type = "box"
 material = "test"
 transform = [{ scale = [1.4, 0.5, 0.5] }, { rotate = { axis = [0, 0, 1], degrees = 45 } }, { rotate = { axis = [0, 1, 0], degrees = 30 } }]
 """ + checker)
+    nested_glass()
     one("shade_transmit", "color = [0.3, 0.8, 0.4]\ntransmit = 0.5\nfilter = 0.2\nphong = 0.5",
         "Filter and transmit with ior 1: light passes straight through and tints shadows.",
         objects="""
@@ -336,6 +337,71 @@ type = "sphere"
 material = "test"
 transform = [{ scale = 0.8 }]
 """ + checker)
+
+
+# A glass block (ior 1.5) holding a water drop (ior 1.33), placed twice, once mirrored.
+# Inside the block a ray meets the drop: it must refract by 1.5/1.33 going in and
+# 1.33/1.5 coming out. The same two shapes are written once as groups and once as a
+# definition with two instances; both must render alike (an instance is only a placement).
+NESTED_MATERIALS = """
+[materials.glass]
+color = [0.95, 0.97, 1.0]
+ambient = 0
+diffuse = 0.05
+filter = 0.9
+phong = 0.5
+ior = 1.5
+
+[materials.water]
+color = [0.8, 0.9, 1.0]
+ambient = 0
+diffuse = 0.05
+filter = 0.85
+ior = 1.33
+"""
+NESTED_CHILDREN = """children = [
+  { type = "box", material = "glass", transform = [{ scale = [0.55, 0.7, 0.45] }] },
+  { type = "sphere", material = "water", transform = [{ scale = 0.32 }, { translate = [0.08, 0.12, -0.05] }] },
+]"""
+NESTED_PLACEMENTS = [
+    "[{ rotate = { axis = [0, 1, 0], degrees = 25 } }, { translate = [-0.85, -0.2, 0] }]",
+    "[{ scale = [-1, 1, 1] }, { rotate = { axis = [1, 0.2, 0], degrees = 12 } }, { translate = [0.9, -0.15, 0.3] }]",
+]
+NESTED_BACKDROP = """
+[[objects]]
+type = "plane"
+material = "floor"
+transform = [{ translate = [0, -1, 0] }]
+
+[[objects]]
+type = "box"
+material = "matte"
+transform = [{ scale = [0.25, 0.25, 0.25] }, { translate = [-0.5, -0.6, 2.2] }]
+
+[[objects]]
+type = "cylinder"
+material = "floor"
+transform = [{ scale = [0.15, 1.3, 0.15] }, { translate = [0.45, 0, 2.6] }]
+
+[[objects]]
+type = "sphere"
+material = "matte"
+transform = [{ scale = 0.3 }, { translate = [1.6, -0.4, 2.0] }]
+"""
+
+
+def nested_glass():
+    head = LOOK + render() + LIGHT + MATERIALS + NESTED_MATERIALS + NESTED_BACKDROP
+    groups = "".join(
+        f'\n[[objects]]\ntype = "group"\n{NESTED_CHILDREN}\ntransform = {p}\n' for p in NESTED_PLACEMENTS)
+    write("shade_nested_glass_group",
+          "# Nested transparent objects (a drop inside a block), as two groups.\n" + head + groups)
+    defs = f'\n[defs.block]\ntype = "group"\n{NESTED_CHILDREN}\n'
+    insts = "".join(
+        f'\n[[objects]]\ntype = "instance"\nof = "block"\ntransform = {p}\n' for p in NESTED_PLACEMENTS)
+    write("shade_nested_glass_instance",
+          "# Nested transparent objects (a drop inside a block), as one definition instanced twice.\n"
+          + head + defs + insts)
 
 
 def mesh():

@@ -102,6 +102,15 @@ impl Shape {
         }
     }
 
+    /// How many surfaces the shape counts as for [`Hit::surface`]: 1 for a primitive or a
+    /// mesh (one object, as in POV-Ray), and every surface below for a definition.
+    pub fn surfaces(&self) -> u64 {
+        match self {
+            Shape::Group(g) => g.surfaces,
+            _ => 1,
+        }
+    }
+
     /// Whether the shape is a closed convex solid (a spawned ray leaving it outward can
     /// never hit it again).
     pub fn is_convex_solid(&self) -> bool {
@@ -273,6 +282,12 @@ pub struct Aggregate {
     bvh: Bvh,
     /// For each instance in the order given to [`Aggregate::new`], its index in `instances`.
     scene_order: Vec<u32>,
+    /// [`Hit::surface`] offset of each instance (the surfaces of the instances before it),
+    /// or empty when every instance is one surface and the offset is its index.
+    surface_base: Vec<u64>,
+    /// Surfaces below this aggregate ([`Shape::surfaces`] summed), or `u64::MAX` when
+    /// that overflows (the scene builder refuses such a scene).
+    surfaces: u64,
 }
 
 impl Aggregate {
@@ -290,11 +305,29 @@ impl Aggregate {
         for (k, (original, _)) in tagged.iter().enumerate() {
             scene_order[*original] = k as u32;
         }
+        let instances: Vec<Instance> = tagged.into_iter().map(|(_, i)| i).collect();
+        let (surface_base, surfaces) = surface_offsets(&instances);
         Aggregate {
-            instances: tagged.into_iter().map(|(_, i)| i).collect(),
+            instances,
             leads,
             bvh,
             scene_order,
+            surface_base,
+            surfaces,
+        }
+    }
+
+    /// Surfaces below this aggregate, or `None` when there are more than `u64::MAX - 1`.
+    pub fn surface_count(&self) -> Option<u64> {
+        (self.surfaces != u64::MAX).then_some(self.surfaces)
+    }
+
+    /// The [`Hit::surface`] offset of instance `k`.
+    #[inline]
+    fn surface_offset(&self, k: usize) -> u64 {
+        match self.surface_base.get(k) {
+            Some(&b) => b,
+            None => k as u64,
         }
     }
 
@@ -427,13 +460,16 @@ impl Aggregate {
         self.bvh.node_bytes() + std::mem::size_of_val(self.leads.as_slice()) > INTERLEAVE_ABOVE
     }
 
-    /// Maps the winner of a search, bounded instance or not, to this space.
+    /// Maps the winner of a search, bounded instance or not, to this space, and numbers
+    /// its surface.
     #[inline]
     fn finish(&self, k: usize, h: Hit) -> Hit {
-        match self.leads.get(k) {
+        let mut h = match self.leads.get(k) {
             Some(lead) if lead.s != 0.0 => lead.finish(h),
             _ => self.instances[k].finish(h),
-        }
+        };
+        h.surface = h.surface.wrapping_add(self.surface_offset(k));
+        h
     }
 
     /// Whether anything is hit with `t_min < t < t_max`.
@@ -465,12 +501,29 @@ impl Aggregate {
     pub fn intersect_brute_force(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let mut t_max = t_max;
-        for inst in &self.instances {
-            if let Some(h) = inst.intersect(ray, t_min, t_max) {
+        for (k, inst) in self.instances.iter().enumerate() {
+            if let Some(mut h) = inst.intersect(ray, t_min, t_max) {
                 t_max = h.t;
+                h.surface = h.surface.wrapping_add(self.surface_offset(k));
                 best = Some(h);
             }
         }
         best
     }
+}
+
+/// The [`Hit::surface`] offsets of `instances` (in stored order) and their total, with the
+/// offsets left out (empty) when every instance is one surface, so that the offset is the
+/// index and costs no memory read. The total saturates at `u64::MAX`.
+fn surface_offsets(instances: &[Instance]) -> (Vec<u64>, u64) {
+    if instances.iter().all(|i| i.shape.surfaces() == 1) {
+        return (Vec::new(), instances.len() as u64);
+    }
+    let mut base = Vec::with_capacity(instances.len());
+    let mut total = 0u64;
+    for i in instances {
+        base.push(total);
+        total = total.saturating_add(i.shape.surfaces());
+    }
+    (base, total)
 }

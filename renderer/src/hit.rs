@@ -26,6 +26,12 @@ pub struct Hit {
     pub material: u32,
     /// 1-based object id, or 0 while unassigned.
     pub object_id: u32,
+    /// Which surface of the scene was hit: every leaf shape under every instance path
+    /// has its own number (a definition instanced twice gives each copy its own). Shapes
+    /// report 0; each aggregate adds the offset of the instance the hit came through.
+    /// Shading keys its interior list by it (an instance is only a placement, so the
+    /// shapes inside one stay distinct objects).
+    pub surface: u64,
 }
 
 impl Hit {
@@ -41,6 +47,7 @@ impl Hit {
             uv,
             material: INHERIT,
             object_id: 0,
+            surface: 0,
         }
     }
 

@@ -26,10 +26,12 @@ const LIGHT_SIDE_EPSILON: Real = 1e-10;
 /// Interiors a ray can be inside at once (nesting depth of transparent objects).
 const MAX_INTERIORS: usize = 16;
 
-/// The objects a ray is inside, innermost last (POV-Ray's interior list).
+/// The objects a ray is inside, innermost last (POV-Ray's interior list), each as the
+/// surface that was entered ([`Hit::surface`]: the shape and the instance path, so two
+/// shapes inside one instanced definition are two objects, as they are in a group).
 #[derive(Clone, Copy, Debug)]
 pub struct Interiors {
-    ids: [(u32, f32); MAX_INTERIORS],
+    ids: [(u64, f32); MAX_INTERIORS],
     len: usize,
 }
 
@@ -43,7 +45,7 @@ impl Default for Interiors {
 }
 
 impl Interiors {
-    fn top(&self) -> Option<(u32, f32)> {
+    fn top(&self) -> Option<(u64, f32)> {
         (self.len > 0).then(|| self.ids[self.len - 1])
     }
     fn outer_ior(&self) -> f32 {
@@ -53,7 +55,7 @@ impl Interiors {
             1.0
         }
     }
-    fn push(&mut self, id: u32, ior: f32) {
+    fn push(&mut self, id: u64, ior: f32) {
         if self.len < MAX_INTERIORS {
             self.ids[self.len] = (id, ior);
             self.len += 1;
@@ -200,7 +202,7 @@ impl<'a> Shader<'a> {
         let mut total_internal = false;
         if trans > scene.settings.adc_bailout {
             let w = weight * fil.abs().max_element();
-            let id = hit.object_id;
+            let id = hit.surface;
             let (entering, eta) = match interiors.top() {
                 Some((top, ior)) if top == id => (false, ior / interiors.outer_ior()),
                 _ => (true, interiors.top().map_or(1.0, |t| t.1) / m.ior),

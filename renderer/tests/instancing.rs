@@ -576,3 +576,76 @@ fn invalid_transforms_are_rejected() {
 fn dmat(m: renderer::real::Mat3) -> DMat3 {
     DMat3::from_cols_array(&m.to_cols_array().map(|x| x as f64))
 }
+
+/// Every surface under every instance path has its own [`Hit::surface`]: a definition of
+/// two shapes instanced twice gives four surfaces, and a definition instanced inside
+/// another keeps the copies apart too. Shading keys its interior list by it, so the shapes
+/// inside one instance are separate objects, as they are in a group.
+#[test]
+fn each_surface_under_each_instance_path_has_its_own_number() {
+    // A definition: a box with a sphere inside, along x.
+    let def = Arc::new(Aggregate::new(vec![
+        Instance {
+            shape: Shape::Cube,
+            xf: None,
+            material: INHERIT,
+            object_id: 0,
+        },
+        instance(Shape::Sphere, &affine(diag(0.5, 0.5, 0.5), DVec3::ZERO)),
+    ]));
+    assert_eq!(def.surface_count(), Some(2));
+    // Two copies of it, side by side, and a plane.
+    let copies = |dx: f64| {
+        let mut i = instance(
+            Shape::Group(def.clone()),
+            &affine(DMat3::IDENTITY, DVec3::new(dx, 0.0, 0.0)),
+        );
+        i.object_id = 1;
+        i
+    };
+    let outer = Arc::new(Aggregate::new(vec![copies(-3.0), copies(3.0)]));
+    assert_eq!(outer.surface_count(), Some(4));
+    // And the pair instanced twice again, above a plane: 8 + 1 surfaces.
+    let root = Aggregate::new(vec![
+        instance(
+            Shape::Plane,
+            &affine(DMat3::IDENTITY, DVec3::new(0.0, -5.0, 0.0)),
+        ),
+        instance(
+            Shape::Group(outer.clone()),
+            &affine(DMat3::IDENTITY, DVec3::new(0.0, 0.0, -10.0)),
+        ),
+        instance(
+            Shape::Group(outer),
+            &affine(DMat3::IDENTITY, DVec3::new(0.0, 0.0, 10.0)),
+        ),
+    ]);
+    assert_eq!(root.surface_count(), Some(9));
+    let mut seen = std::collections::BTreeSet::new();
+    for z in [-10.0, 10.0] {
+        for x in [-3.0, 3.0] {
+            // A ray along +y from below each copy's centre: it enters the box first
+            // (from inside the plane's half-space, above y = -5), then the sphere.
+            let o = DVec3::new(x, -4.0, z);
+            let (r, _, _) = ray(o, DVec3::Y);
+            let outer_hit = root.intersect(&r, 0.0, INF).unwrap();
+            let inner_hit = root.intersect(&r, outer_hit.t * 1.0001, INF).unwrap();
+            assert_eq!(outer_hit, root.intersect_brute_force(&r, 0.0, INF).unwrap());
+            assert!(
+                seen.insert(outer_hit.surface),
+                "box at ({x}, {z}) shares a number"
+            );
+            assert!(
+                seen.insert(inner_hit.surface),
+                "sphere at ({x}, {z}) shares a number"
+            );
+            assert_eq!(
+                outer_hit.object_id, inner_hit.object_id,
+                "one object id per copy"
+            );
+        }
+    }
+    let (down, _, _) = ray(DVec3::new(0.0, 0.0, 0.0), -DVec3::Y);
+    assert!(seen.insert(root.intersect(&down, 0.0, INF).unwrap().surface));
+    assert!(seen.iter().all(|&s| s < 9), "numbers are dense: {seen:?}");
+}

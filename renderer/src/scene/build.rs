@@ -243,6 +243,14 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
     }
     let objects = std::mem::take(&mut b.objects);
     let root = Aggregate::new(instances);
+    if root.surface_count().is_none() {
+        return Err(src.error(
+            0,
+            "objects",
+            "the scene expands to more than 2^64 - 1 surfaces (instances of definitions \
+             multiply); a scene's surfaces must be countable in 64 bits",
+        ));
+    }
     let mut area_lights = Vec::new();
     let mut area_light_of = vec![u32::MAX; objects.len() + 1];
     for inst in root.in_scene_order() {
@@ -590,6 +598,16 @@ impl Builder<'_> {
         )?;
         self.in_progress.remove(name);
         let agg = Arc::new(Aggregate::new(inner));
+        if agg.surface_count().is_none() {
+            return Err(self.src.error(
+                of.span().start,
+                "of",
+                format!(
+                    "definition '{name}' expands to more than 2^64 - 1 surfaces (its instances \
+                     of other definitions multiply); a scene's surfaces must be countable in 64 bits"
+                ),
+            ));
+        }
         self.built_defs.insert(name.clone(), agg.clone());
         Ok(agg)
     }
