@@ -358,6 +358,16 @@ impl Aggregate {
         self.bvh.bounds()
     }
 
+    /// The instances with infinite bounds (planes), which sit beside the BVH.
+    pub fn unbounded_instances(&self) -> &[Instance] {
+        self.unbounded()
+    }
+
+    /// Bounds of the bounded instances alone (the BVH's), or `None` when there are none.
+    pub fn bounded_bounds(&self) -> Option<Aabb> {
+        (self.bounded() > 0).then(|| self.bvh.bounds())
+    }
+
     /// Closest hit of bounded instance `k`, in its object space.
     #[inline]
     fn local_hit(&self, k: usize, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {

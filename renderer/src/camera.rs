@@ -238,6 +238,8 @@ pub struct Camera {
     pub eye64: DVec3,
     /// The model this camera was built from.
     pub model: ViewingModel,
+    /// Where render space's origin lies in world coordinates (see [`Camera::rebased`]).
+    origin: DVec3,
     u: Vec3,
     v: Vec3,
     n: Vec3,
@@ -277,11 +279,28 @@ impl Camera {
             basis64,
             eye64,
             model,
+            origin: DVec3::ZERO,
             u: vec3(u),
             v: vec3(v),
             n: vec3(n),
             eye: vec3(eye64),
         })
+    }
+
+    /// The same camera in a render space whose origin is the world point `origin`
+    /// (computed in `f64`, then converted): rays start at `eye64 − origin`, which is
+    /// exactly 0 when the origin is the eye. The model stays in world coordinates.
+    pub fn rebased(&self, origin: DVec3) -> Camera {
+        Camera {
+            origin,
+            eye: vec3(self.eye64 - origin),
+            ..*self
+        }
+    }
+
+    /// Where render space's origin lies in world coordinates (0 unless rebased).
+    pub fn origin(&self) -> DVec3 {
+        self.origin
     }
 
     /// Pixel columns.
@@ -294,7 +313,7 @@ impl Camera {
         self.model.rows
     }
 
-    /// The eye, in world coordinates.
+    /// The eye, in render space (world coordinates minus [`Camera::origin`]).
     pub fn eye(&self) -> Vec3 {
         self.eye
     }

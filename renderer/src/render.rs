@@ -208,6 +208,8 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
 
 fn fill_aov(scene: &Scene, a: &mut Aov, w: usize) {
     let eye = dvec3(scene.camera.eye());
+    // P reports world coordinates: render space plus the origin it was moved to.
+    let origin = scene.origin();
     a.z.par_chunks_mut(w)
         .zip(a.n.par_chunks_mut(w * 3))
         .zip(a.p.par_chunks_mut(w * 3))
@@ -238,7 +240,7 @@ fn fill_aov(scene: &Scene, a: &mut Aov, w: usize) {
                 z[i] = (hp - eye).length() as f32;
                 for k in 0..3 {
                     n[3 * i + k] = ng[k] as f32;
-                    p[3 * i + k] = hp[k] as f32;
+                    p[3 * i + k] = (hp[k] + origin[k]) as f32;
                 }
                 id[i] = hit.object_id as f32;
             }

@@ -68,7 +68,8 @@ fn test02_examples_render_sanely() {
             );
         }
         // Geometry channels are consistent: unit normals where hit, Z = |P − eye|.
-        let eye = renderer::real::dvec3(scene.camera.eye());
+        // P is in world coordinates (the scene may render in a space moved to the eye).
+        let eye = scene.camera.eye64;
         for k in 0..aov.z.len() {
             if aov.object_id[k] == 0.0 {
                 assert_eq!(

@@ -139,7 +139,8 @@ pub fn export(scene: &Scene, spp: u32, moment: bool) -> Result<Export, ExportErr
         xml.push_str(&e.light(l.kind, l.position, l.direction, l.color));
     }
     let root = &scene.root;
-    e.aggregate(root, &Affine64::IDENTITY, None)?;
+    // Top-level objects go from render space back to the scene's own coordinates.
+    e.aggregate(root, &Affine64::translate(scene.origin()), None)?;
     xml.push_str(&e.body);
     xml.push_str("</scene>\n");
     Ok(Export {
@@ -210,7 +211,7 @@ impl Exporter<'_> {
     ) -> String {
         match kind {
             LightKind::Point => {
-                let p = MIRROR * dvec3(position);
+                let p = MIRROR * (dvec3(position) + self.scene.origin());
                 format!(
                     "  <emitter type=\"point\"><point name=\"position\" x=\"{}\" y=\"{}\" z=\"{}\"/><rgb name=\"intensity\" value=\"{}\"/></emitter>\n",
                     f(p.x),

@@ -55,17 +55,28 @@ fn rgb(c: Color) -> String {
     format!("<{}, {}, {}>", f(c.x), f(c.y), f(c.z))
 }
 
+/// A render-space point in world coordinates: as [`vec`] when the scene was not moved
+/// (`origin` 0, the text both builds share), else render space plus the origin, in f64.
+fn world(p: renderer::Vec3, origin: glam::DVec3) -> String {
+    if origin == glam::DVec3::ZERO {
+        vec(p)
+    } else {
+        vec64(renderer::real::dvec3(p) + origin)
+    }
+}
+
 /// POV-Ray's `matrix`: rows of the row-vector convention, i.e. the columns of the stored
-/// column-vector matrix, then the translation.
-fn matrix(t: &Transform) -> String {
+/// column-vector matrix, then the translation. `origin` moves a top-level object from
+/// render space back to the scene's own coordinates (0 inside definitions).
+fn matrix(t: &Transform, origin: glam::DVec3) -> String {
     let m = t.matrix();
-    let d = t.translation();
     let cols = [m.x_axis, m.y_axis, m.z_axis];
     let mut s = String::from("matrix <");
     for c in cols {
         write!(s, "{}, {}, {}, ", num(c.x), num(c.y), num(c.z)).unwrap();
     }
-    write!(s, "{}, {}, {}>", num(d.x), num(d.y), num(d.z)).unwrap();
+    let d = world(t.translation(), origin);
+    write!(s, "{}>", &d[1..d.len() - 1]).unwrap();
     s
 }
 
@@ -137,7 +148,7 @@ impl Exporter<'_> {
             write!(
                 o,
                 "light_source {{ {} color rgb {}",
-                vec(l.position),
+                world(l.position, self.scene.origin()),
                 rgb(l.color)
             )
             .unwrap();
@@ -185,8 +196,18 @@ impl Exporter<'_> {
     fn instance(&mut self, inst: &Instance, top: bool) -> String {
         let shape = self.shape(&inst.shape);
         let mut mods = String::new();
-        if let Some(t) = &inst.xf {
-            write!(mods, " {}", matrix(t)).unwrap();
+        // A top-level object goes from render space back to the scene's own coordinates.
+        let origin = if top {
+            self.scene.origin()
+        } else {
+            glam::DVec3::ZERO
+        };
+        match &inst.xf {
+            Some(t) => write!(mods, " {}", matrix(t, origin)).unwrap(),
+            None if origin != glam::DVec3::ZERO => {
+                write!(mods, " translate {}", vec64(origin)).unwrap()
+            }
+            None => {}
         }
         let material = if inst.material == INHERIT && top {
             0

@@ -77,6 +77,7 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
     let camera = build_camera(&desc.camera, r.width, r.height, &src)?;
 
     let mut lights = Vec::new();
+    let mut light_positions = Vec::new();
     for (k, l) in desc.lights.iter().enumerate() {
         let d = l.get_ref();
         let field = format!("lights[{k}]");
@@ -103,6 +104,7 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
             }
             LightKind::Environment => {}
         }
+        light_positions.push(position);
         if d.kind != LightKind::Point && classic {
             return Err(err(
                 "type",
@@ -132,6 +134,7 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
         };
         lights.push(Light {
             kind: d.kind,
+            // World coordinates for now; moved into render space once the origin is known.
             position: vec3(position),
             direction: vec3(direction),
             color: color(d.color),
@@ -229,20 +232,23 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
         in_progress: HashSet::new(),
         meshes: HashMap::new(),
         objects: Vec::new(),
+        origin: DVec3::ZERO,
     };
-    let mut instances = Vec::new();
-    for (k, node) in desc.objects.iter().enumerate() {
-        b.node(
-            node,
-            &format!("objects[{k}]"),
-            &Affine64::IDENTITY,
-            0,
-            true,
-            &mut instances,
-        )?;
+    // Build in world coordinates; then, if the scene lies far from the world origin
+    // compared with its own extent, build its objects again in a render space whose
+    // origin is the eye (definitions and meshes are reused: they have their own spaces).
+    let mut root = Aggregate::new(b.top_level(&desc.objects, DVec3::ZERO)?);
+    let origin = render_origin(&root, camera.eye64);
+    let camera = if origin == DVec3::ZERO {
+        camera
+    } else {
+        root = Aggregate::new(b.top_level(&desc.objects, origin)?);
+        camera.rebased(origin)
+    };
+    for (l, p) in lights.iter_mut().zip(light_positions) {
+        l.position = vec3(p - origin);
     }
     let objects = std::mem::take(&mut b.objects);
-    let root = Aggregate::new(instances);
     if root.surface_count().is_none() {
         return Err(src.error(
             0,
@@ -272,6 +278,33 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
         area_lights,
         area_light_of,
     })
+}
+
+/// Where render space's origin goes, in world coordinates: the eye, when the eye is
+/// farther from the world origin than twice its distance to every object (then every
+/// object is nearer the eye than the world origin is, so moving the origin to the eye
+/// makes every coordinate smaller, and so more precise, in the render precision);
+/// otherwise the world origin stays (0). A bounded object counts by its box; an unbounded
+/// one (a plane) by the point its transform places at its object-space origin.
+/// renderer/docs/precision.md measures what it buys.
+fn render_origin(root: &Aggregate, eye: DVec3) -> DVec3 {
+    let dv = crate::real::dvec3;
+    let mut reach: f64 = root.bounded_bounds().map_or(0.0, |b| {
+        // The farthest corner of the bounded objects' box from the eye.
+        (eye - dv(b.min))
+            .abs()
+            .max((eye - dv(b.max)).abs())
+            .length()
+    });
+    for inst in root.unbounded_instances() {
+        let anchor = inst.xf.map_or(DVec3::ZERO, |x| dv(x.translation()));
+        reach = reach.max((eye - anchor).length());
+    }
+    if eye.length() > 2.0 * reach {
+        eye
+    } else {
+        DVec3::ZERO
+    }
 }
 
 fn build_camera(
@@ -401,9 +434,36 @@ struct Builder<'a> {
     in_progress: HashSet<String>,
     meshes: HashMap<PathBuf, Arc<Mesh>>,
     objects: Vec<String>,
+    /// The world point at render space's origin.
+    origin: DVec3,
 }
 
 impl Builder<'_> {
+    /// The scene's own objects, flattened, in the render space whose origin is the world
+    /// point `origin`: every top-level transform is composed (in `f64`) with a translation
+    /// by `−origin` before it is converted to the render precision.
+    fn top_level(
+        &mut self,
+        objects: &[Spanned<NodeDesc>],
+        origin: DVec3,
+    ) -> Result<Vec<Instance>, SceneError> {
+        self.objects.clear();
+        self.origin = origin;
+        let rebase = Affine64::translate(-origin);
+        let mut instances = Vec::new();
+        for (k, node) in objects.iter().enumerate() {
+            self.node(
+                node,
+                &format!("objects[{k}]"),
+                &rebase,
+                0,
+                true,
+                &mut instances,
+            )?;
+        }
+        Ok(instances)
+    }
+
     /// Flattens `node` into `out`. `numbered`: nodes of the scene's own tree get object ids;
     /// nodes inside definitions inherit the id of the instance that places them.
     fn node(
@@ -433,7 +493,7 @@ impl Builder<'_> {
                 .map_err(|e| self.src.error(op.span().start, &field, e))?;
             local = a.compose(&local);
         }
-        let xf = parent.compose(&local);
+        let mut xf = parent.compose(&local);
 
         let material = match &d.material {
             Some(m) => *self.materials.get(m.get_ref()).ok_or_else(|| {
@@ -476,7 +536,15 @@ impl Builder<'_> {
                     .vertices
                     .as_ref()
                     .ok_or_else(|| err("vertices", &"a triangle needs three vertices"))?;
-                let p = v.get_ref().map(|q| vec3(dv(q)));
+                // Vertices placed by a pure translation in a rebased scene are world
+                // coordinates: move them into render space in f64, so their precision
+                // is the render space's, not the world's.
+                let shift = if self.origin != DVec3::ZERO && xf.m == DMat3::IDENTITY {
+                    std::mem::replace(&mut xf, Affine64::IDENTITY).d
+                } else {
+                    DVec3::ZERO
+                };
+                let p = v.get_ref().map(|q| vec3(dv(q) + shift));
                 if p.iter().any(|q| !q.is_finite()) {
                     return Err(self.src.error(
                         v.span().start,

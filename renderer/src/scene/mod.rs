@@ -37,6 +37,13 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The world point at render space's origin: 0, or the eye when the scene was moved
+    /// there for precision (scene/build.rs, `render_origin`). Hit points, lights and the
+    /// camera are in render space; add this to report world coordinates.
+    pub fn origin(&self) -> glam::DVec3 {
+        self.camera.origin()
+    }
+
     /// The material of a hit.
     #[inline]
     pub fn material(&self, index: u32) -> &Material {

@@ -4,7 +4,7 @@
 use super::{azimuth, local_hit};
 use crate::hit::Hit;
 use crate::ray::Ray;
-use crate::real::{gamma, Real, Vec2, Vec3};
+use crate::real::{dvec3, gamma, Real, Vec2, Vec3};
 
 const K2: Real = 0.25;
 
@@ -15,38 +15,45 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
     let (o, d) = (ray.o, ray.d);
     let mut best: Option<Hit> = None;
     let mut t_max = t_max;
-    // w = 1 − y.
-    let (ow, dw) = (1.0 - o.y, -d.y);
-    let a = d.x * d.x + d.z * d.z - K2 * dw * dw;
-    let b = o.x * d.x + o.z * d.z - K2 * ow * dw;
-    let c = o.x * o.x + o.z * o.z - K2 * ow * ow;
-    let mut roots = [Real::NAN; 2];
+    // The quadratic's coefficients, its discriminant and its roots in f64, in both builds,
+    // as for the sphere and the cylinder: in f32 the products d·(b/a), of size |o|, move l
+    // by ε·|o|, so a far cone (|o| ≫ 1 in object space) got wrong hits and misses near
+    // its silhouette. w = 1 − y.
+    let (o64, d64) = (dvec3(o), dvec3(d));
+    let k2 = K2 as f64;
+    let (ow, dw) = (1.0 - o64.y, -d64.y);
+    let a = d64.x * d64.x + d64.z * d64.z - k2 * dw * dw;
+    let b = o64.x * d64.x + o64.z * d64.z - k2 * ow * dw;
+    let c = o64.x * o64.x + o64.z * o64.z - k2 * ow * ow;
+    let mut roots = [f64::NAN; 2];
     // Which t lie inside the double cone x² + z² ≤ k²(1 − y)²: [lo, hi], or outside (lo, hi)
     // when the flag is set. The base cap is hit only inside, and a side root counts only
     // inside the slab −1 ≤ y ≤ 1 (whose ends are computed exactly as the cap's t): the
     // same computed values decide both, so a ray entering at the base rim cannot slip
     // between the cap and the side (as in the cylinder).
-    let mut inside = (Real::INFINITY, Real::NEG_INFINITY, false);
-    let scale = d.length_squared();
-    if a.abs() <= scale * Real::EPSILON {
+    let mut inside = (f64::INFINITY, f64::NEG_INFINITY, false);
+    let scale = d64.length_squared();
+    // Parallel to a generator line when `a` vanishes up to the rounding of the render
+    // precision's direction (the same test in both builds' terms).
+    if a.abs() <= scale * Real::EPSILON as f64 {
         // The ray is parallel to a generator line: one root.
         if b != 0.0 {
             roots[0] = -c / (2.0 * b);
             inside = if b > 0.0 {
-                (Real::NEG_INFINITY, roots[0], false)
+                (f64::NEG_INFINITY, roots[0], false)
             } else {
-                (roots[0], Real::INFINITY, false)
+                (roots[0], f64::INFINITY, false)
             };
         } else if c <= 0.0 {
-            inside = (Real::NEG_INFINITY, Real::INFINITY, false);
+            inside = (f64::NEG_INFINITY, f64::INFINITY, false);
         }
     } else {
         // b² − a·c cancels catastrophically when the roots are close relative to the
         // origin's distance (a ray passing near the apex from afar). As for the sphere,
         // use b² − a·c = −a·Q(l) with l = o − d·(b/a) and Q(v) = x² + z² − k²·w².
         let s = b / a;
-        let (lx, lw, lz) = (o.x - d.x * s, ow - dw * s, o.z - d.z * s);
-        let disc = -a * (lx * lx + lz * lz - K2 * lw * lw);
+        let (lx, lw, lz) = (o64.x - d64.x * s, ow - dw * s, o64.z - d64.z * s);
+        let disc = -a * (lx * lx + lz * lz - k2 * lw * lw);
         if disc >= 0.0 {
             let s = disc.sqrt();
             let q = -(b + s.copysign(b));
@@ -62,9 +69,12 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
         } else if a < 0.0 {
             // The whole line is inside the double cone: it passes through the apex, where
             // rounding lost the double root (see the apex below).
-            inside = (Real::NEG_INFINITY, Real::INFINITY, false);
+            inside = (f64::NEG_INFINITY, f64::INFINITY, false);
         }
     }
+    // In the render precision from here on.
+    let roots = roots.map(|t| t as Real);
+    let inside = (inside.0 as Real, inside.1 as Real, inside.2);
     let in_cone = |t: Real| {
         let (lo, hi, outside) = inside;
         if outside {

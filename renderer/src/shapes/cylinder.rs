@@ -20,12 +20,18 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
     // rounded point and the radius of another left a gap: 1.8 % of the rays aimed at a
     // rim from inside the solid's tangent cone missed in f32.)
     let (ty0, ty1) = slab(o.y, d.y);
-    let a = d.x * d.x + d.z * d.z;
+    // a, b, l and the discriminant in f64, in both builds, as for the sphere: in f32 the
+    // products d·(b/a), of size |o|, move l by ε·|o|, so a far cylinder (|o| ≫ 1 in
+    // object space) got wrong hits and misses near its silhouette.
+    let (ox, oz, dx, dz) = (o.x as f64, o.z as f64, d.x as f64, d.z as f64);
+    let a64 = dx * dx + dz * dz;
+    let a = a64 as Real;
     let mut roots: Option<(Real, Real)> = None;
     if a > 0.0 {
-        let b = o.x * d.x + o.z * d.z;
-        let (lx, lz) = (o.x - d.x * (b / a), o.z - d.z * (b / a));
-        let disc = a * (1.0 - (lx * lx + lz * lz));
+        let b64 = ox * dx + oz * dz;
+        let (lx64, lz64) = (ox - dx * (b64 / a64), oz - dz * (b64 / a64));
+        let disc64 = a64 * (1.0 - (lx64 * lx64 + lz64 * lz64));
+        let (b, disc) = (b64 as Real, disc64 as Real);
         if disc >= 0.0 {
             let c = o.x * o.x + o.z * o.z - 1.0;
             let (t0, t1) = stable_roots(a, b, c, disc);
@@ -35,8 +41,8 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
                     // The point in xz as l ∓ d·√disc/a (l: the line's closest point to the
                     // axis), not o + t·d, which cancels when |o| ≫ 1 (a far or flattened
                     // instance seen in object space), down to the axis itself and a NaN.
-                    let k = side * disc.sqrt() / a;
-                    let (mut x, mut z) = (lx + d.x * k, lz + d.z * k);
+                    let k = side * disc64.sqrt() / a64;
+                    let (mut x, mut z) = ((lx64 + dx * k) as Real, (lz64 + dz * k) as Real);
                     let mut r = (x * x + z * z).sqrt();
                     if !(r > 0.0 && r.is_finite()) {
                         // Nothing left of the point: the side facing the ray.
