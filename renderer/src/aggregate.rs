@@ -13,7 +13,7 @@
 //! instances that use it.
 
 use crate::aabb::Aabb;
-use crate::bvh::{prefetch, Bvh, Visit, BATCH};
+use crate::bvh::{prefetch, Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
 pub use crate::hit::{Hit, INHERIT};
 use crate::ray::Ray;
 use crate::real::{Mat3, Real, Vec3};
@@ -92,6 +92,27 @@ impl Shape {
         }
     }
 
+    /// [`Shape::intersect`] for up to [`BATCH`] rays, each with its own `t_max`: meshes
+    /// and definitions walk their trees with the rays together; other shapes take them
+    /// one by one. Each result is exactly `intersect`'s.
+    pub fn intersect_batch(
+        &self,
+        rays: &[Ray],
+        t_min: Real,
+        t_max: &[Real],
+        out: &mut [Option<Hit>],
+    ) {
+        match self {
+            Shape::Mesh(m) => m.intersect_batch(rays, t_min, t_max, out),
+            Shape::Group(g) => g.intersect_batch(rays, t_min, t_max, out),
+            _ => {
+                for ((r, &tm), o) in rays.iter().zip(t_max).zip(out.iter_mut()) {
+                    *o = self.intersect(r, t_min, tm);
+                }
+            }
+        }
+    }
+
     /// Whether anything is hit with `t_min < t < t_max` (shadow rays).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
@@ -160,6 +181,22 @@ impl Instance {
         match &self.xf {
             Some(x) => self.shape.intersect(&x.inv_ray(ray), t_min, t_max),
             None => self.shape.intersect(ray, t_min, t_max),
+        }
+    }
+
+    /// [`Instance::local_hit`] for up to [`BATCH`] rays, each with its own `t_max`: the
+    /// shape walks them together where it has a tree of its own.
+    fn local_hit_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real], out: &mut [Option<Hit>]) {
+        match &self.xf {
+            Some(x) => {
+                let mut local = [Ray::new(Vec3::ZERO, Vec3::ONE); BATCH];
+                for (l, r) in local.iter_mut().zip(rays) {
+                    *l = x.inv_ray(r);
+                }
+                self.shape
+                    .intersect_batch(&local[..rays.len()], t_min, t_max, out)
+            }
+            None => self.shape.intersect_batch(rays, t_min, t_max, out),
         }
     }
 
@@ -261,13 +298,6 @@ impl Lead {
         h.inherit(self.material, self.object_id)
     }
 }
-
-/// Size of an aggregate's own tree (its BVH nodes plus leads, in bytes; meshes and nested
-/// groups below it not counted) above which [`Aggregate::intersect_many`]
-/// interleaves rays. Below it the tree stays in the L2 cache (1 MiB per core on the
-/// development machine), and one ray at a time is faster: at 10⁴ spheres (0.5 MB)
-/// interleaving took 3.87 ms against 3.71 ms, at 10⁵ (5.4 MB) 4.67 ms against 7.11 ms.
-pub const INTERLEAVE_ABOVE: usize = 1 << 20;
 
 /// Cost of one instance-level node visit in units of one primitive test, for the SAH.
 const TRAVERSAL_COST: Real = 1.0;
@@ -437,30 +467,63 @@ impl Aggregate {
     /// ray at a time. The classic integrator's camera rays and the AOVs go through here.
     pub fn intersect_many(&self, rays: &[Ray], t_min: Real, t_max: Real, out: &mut [Option<Hit>]) {
         assert_eq!(rays.len(), out.len(), "one output per ray");
-        if !self.interleaves() {
-            for (ray, o) in rays.iter().zip(out.iter_mut()) {
-                *o = self.intersect(ray, t_min, t_max);
+        for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
+            self.intersect_batch(rays, t_min, &[t_max; BATCH][..rays.len()], out);
+        }
+    }
+
+    /// [`Aggregate::intersect_many`] for up to [`BATCH`] rays, each with its own `t_max`.
+    fn intersect_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real], out: &mut [Option<Hit>]) {
+        if self.bounded() == 1 && self.leads[0].s == 0.0 {
+            // One bounded instance (a mesh, a definition): its own tree is the one to
+            // walk rays together through, which the instance's batch does. (The single
+            // leaf's box test is skipped, as `Bvh::traverse` does.) The unbounded
+            // instances go first and bound each ray's search, as in `intersect`.
+            let mut bound = [0.0; BATCH];
+            let mut unbounded: [Option<(usize, Hit)>; BATCH] = [None; BATCH];
+            let any_unbounded = !self.unbounded().is_empty();
+            for (r, ray) in rays.iter().enumerate() {
+                (unbounded[r], bound[r]) = if any_unbounded {
+                    self.nearest_unbounded(ray, t_min, t_max[r])
+                } else {
+                    (None, t_max[r])
+                };
+            }
+            self.instances[0].local_hit_batch(rays, t_min, &bound[..rays.len()], out);
+            for (o, u) in out.iter_mut().zip(unbounded) {
+                *o = match (o.take(), u) {
+                    (Some(h), _) => Some(self.finish(0, h)),
+                    (None, Some((k, h))) => Some(self.finish(k, h)),
+                    (None, None) => None,
+                };
             }
             return;
         }
-        for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
-            let mut best: [Option<(usize, Hit)>; BATCH] = [None; BATCH];
-            let mut bound = [t_max; BATCH];
-            for (r, ray) in rays.iter().enumerate() {
-                (best[r], bound[r]) = self.nearest_unbounded(ray, t_min, t_max);
-            }
+        let mut best: [Option<(usize, Hit)>; BATCH] = [None; BATCH];
+        let mut bound = [0.0; BATCH];
+        for (r, ray) in rays.iter().enumerate() {
+            (best[r], bound[r]) = self.nearest_unbounded(ray, t_min, t_max[r]);
+        }
+        let bound = &bound[..rays.len()];
+        if self.interleaves() {
             self.bvh.traverse_batch(
                 rays,
                 t_min,
-                &bound[..rays.len()],
+                bound,
                 |r, k, tmax| self.visit(k, &rays[r], t_min, tmax, &mut best[r]),
                 |first, count| {
                     prefetch(&self.leads[first as usize..first as usize + count as usize])
                 },
             );
-            for (o, b) in out.iter_mut().zip(best) {
-                *o = b.map(|(k, h)| self.finish(k, h));
+        } else {
+            for (r, ray) in rays.iter().enumerate() {
+                self.bvh.traverse(ray, t_min, bound[r], false, |k, tmax| {
+                    self.visit(k, ray, t_min, tmax, &mut best[r])
+                });
             }
+        }
+        for (o, b) in out.iter_mut().zip(best) {
+            *o = b.map(|(k, h)| self.finish(k, h));
         }
     }
 

@@ -10,7 +10,7 @@
 
 use crate::aabb::Aabb;
 use crate::ray::Ray;
-use crate::real::{gamma, pow2, Real, Vec3, Vec4};
+use crate::real::{gamma, Real, Vec3, Vec4};
 
 const BINS: usize = 16;
 const MAX_LEAF: usize = 4;
@@ -26,6 +26,9 @@ const LONG_STACK: usize = 3 * (MAX_DEPTH + 26) + 1;
 /// Traversal stack for trees of depth up to 21 (every tree of fewer than about a million
 /// primitives in practice): a smaller array is cheaper to set up for every ray.
 const SHORT_STACK: usize = 64;
+/// Traversal stack for trees of depth up to 10 (a few thousand primitives, or a mesh of a
+/// million triangles in a good tree): set up for every ray, so small pays.
+const TINY_STACK: usize = 31;
 
 /// A node of the binary tree the SAH builds. Interior nodes (`count == 0`) have children
 /// at `first` and `first + 1`; leaves name the slots `first..first + count`.
@@ -36,137 +39,68 @@ struct Node2 {
     count: u32,
 }
 
-/// A node of the 4-wide tree. Its children's boxes are quantized to one byte per
-/// coordinate on a grid laid over the node's own box: on axis `a`, child `k` spans
-/// `origin[a] + q·2^exp[a]` for `q` from `qmin[a][k]` to `qmax[a][k]`. The build rounds
-/// every bound outward and checks it with the same arithmetic traversal uses, so a
-/// decoded box always contains the child's exact box: quantization can add box visits,
-/// never lose a hit. Per child the node holds either an interior node index
-/// (`count == 0`) or a leaf's first slot and count. In the `f32` build a node is one
-/// 64-byte cache line (four children with full-precision boxes took two).
+/// A node of the 4-wide tree: the boxes of up to four children side by side, one array
+/// of four lanes per axis and side, so that one SIMD slab test covers them all. Per child
+/// the node holds either an interior node index (`count == 0`) or a leaf's first slot and
+/// count.
 #[repr(C, align(64))]
 #[derive(Clone, Copy, Debug)]
 struct Node {
-    origin: [Real; 3],
+    /// Per axis `a`, `b[2a]` holds the four children's low sides and `b[2a + 1]` their
+    /// high sides.
+    b: [[Real; 4]; 6],
     child: [u32; 4],
-    exp: [i16; 3],
-    qmin: [[u8; 4]; 3],
-    qmax: [[u8; 4]; 3],
     count: [u8; 4],
     lanes: u8,
 }
 
-#[cfg(not(feature = "f64"))]
-const _: () = assert!(std::mem::size_of::<Node>() == 64);
-
-/// The grid coordinate `q` on an axis with this origin and exponent, as traversal
-/// decodes it.
-#[inline]
-fn decode(origin: Real, exp: i16, q: u8) -> Real {
-    origin + q as Real * pow2(exp as i32)
-}
-
-/// Four grid coordinates as lanes.
-#[inline]
-fn lanes_of(q: &[u8; 4]) -> Vec4 {
-    Vec4::new(q[0] as Real, q[1] as Real, q[2] as Real, q[3] as Real)
-}
-
 impl Node {
     const EMPTY: Node = Node {
-        origin: [0.0; 3],
+        b: [[0.0; 4]; 6],
         child: [0; 4],
-        exp: [0; 3],
-        qmin: [[0; 4]; 3],
-        qmax: [[0; 4]; 3],
         count: [0; 4],
         lanes: 0,
     };
 
-    /// The slab test of [`Aabb::hit`] on the four decoded child boxes at once: each
-    /// lane's entry distance, and a bit mask of the lanes whose box the ray overlaps
-    /// within `[t_min, t_max]`. NaN slabs (origin on a slab plane, direction parallel to
-    /// it) do not constrain the ray, and the far distance is inflated by `1 + 2γ(3)`, as
-    /// there.
-    #[inline]
-    fn hit(&self, o: &[Vec4; 3], inv_d: &[Vec4; 3], t_min: Real, t_max: Real) -> (Vec4, u32) {
-        let mut near = Vec4::splat(t_min);
-        let mut far = Vec4::splat(t_max);
+    /// The slab test of [`Aabb::hit`] on the four child boxes at once: each lane's entry
+    /// distance, and a bit mask of the lanes whose box the ray overlaps within
+    /// `[t_min, t_max]`. The ray's planes are chosen by the sign of its direction (the
+    /// near plane of a slab is its low side when the direction is positive). A product
+    /// `(plane − o)·(1/d)` is NaN only when `d` is ±0 on that axis and the origin lies on
+    /// the plane; such a slab does not constrain the ray, as there, and rays with a zero
+    /// direction component take the path that masks it. The far distance is inflated by
+    /// `1 + 2γ(3)`, as there.
+    #[inline(always)]
+    fn hit(&self, w: &Walk) -> (Vec4, u32) {
+        let mut near = Vec4::splat(w.t_min);
+        let mut far = Vec4::splat(w.t_max);
         for a in 0..3 {
-            let origin = Vec4::splat(self.origin[a]);
-            let step = Vec4::splat(pow2(self.exp[a] as i32));
-            let lo = origin + lanes_of(&self.qmin[a]) * step;
-            let hi = origin + lanes_of(&self.qmax[a]) * step;
-            let t0 = (lo - o[a]) * inv_d[a];
-            let t1 = (hi - o[a]) * inv_d[a];
-            let nan = t0.is_nan_mask() | t1.is_nan_mask();
-            near = near.max(Vec4::select(nan, Vec4::NEG_INFINITY, t0.min(t1)));
-            far = far.min(Vec4::select(nan, Vec4::INFINITY, t0.max(t1)));
+            let n = Vec4::from_array(self.b[w.near[a]]);
+            let f = Vec4::from_array(self.b[w.near[a] ^ 1]);
+            let t0 = (n - w.o[a]) * w.inv_d[a];
+            let t1 = (f - w.o[a]) * w.inv_d[a];
+            if w.parallel {
+                near = near.max(Vec4::select(t0.is_nan_mask(), Vec4::NEG_INFINITY, t0));
+                far = far.min(Vec4::select(t1.is_nan_mask(), Vec4::INFINITY, t1));
+            } else {
+                near = near.max(t0);
+                far = far.min(t1);
+            }
         }
         let mask = near.cmple(far * (1.0 + 2.0 * gamma(3))).bitmask() & ((1 << self.lanes) - 1);
         (near, mask)
     }
 
-    /// Lays the grid over `boxes` (the children, in lane order) and stores their bounds.
-    fn quantize(&mut self, boxes: &[Aabb]) {
-        let parent = boxes.iter().fold(Aabb::EMPTY, |u, b| u.union(b));
+    /// Stores the children's boxes (in lane order).
+    fn set_boxes(&mut self, boxes: &[Aabb]) {
         self.lanes = boxes.len() as u8;
-        for a in 0..3 {
-            let origin = parent.min[a];
-            let extent = parent.max[a] as f64 - origin as f64;
-            // The smallest step with 255 steps covering the extent, then coarser until
-            // every child's bounds fit (a guard against rounding in the extent).
-            let mut exp = if extent > 0.0 {
-                (extent / 255.0).log2().ceil() as i32 - 1
-            } else {
-                i32::MIN
-            };
-            loop {
-                exp = exp.clamp(i16::MIN as i32, i16::MAX as i32);
-                let e = exp as i16;
-                let fits = boxes.iter().enumerate().all(|(k, b)| {
-                    match (
-                        lower_code(origin, e, b.min[a]),
-                        upper_code(origin, e, b.max[a]),
-                    ) {
-                        (Some(lo), Some(hi)) => {
-                            self.qmin[a][k] = lo;
-                            self.qmax[a][k] = hi;
-                            true
-                        }
-                        _ => false,
-                    }
-                });
-                if fits {
-                    self.origin[a] = origin;
-                    self.exp[a] = e;
-                    break;
-                }
-                exp += 1;
+        for (k, b) in boxes.iter().enumerate() {
+            for a in 0..3 {
+                self.b[2 * a][k] = b.min[a];
+                self.b[2 * a + 1][k] = b.max[a];
             }
         }
     }
-}
-
-/// The largest grid coordinate whose decoded value is at most `x` (with `x` at or above
-/// the origin, 0 always qualifies).
-fn lower_code(origin: Real, exp: i16, x: Real) -> Option<u8> {
-    let guess = ((x as f64 - origin as f64) / pow2(exp as i32) as f64).floor();
-    let mut q = guess.clamp(0.0, 255.0) as u8;
-    while q > 0 && decode(origin, exp, q) > x {
-        q -= 1;
-    }
-    (decode(origin, exp, q) <= x).then_some(q)
-}
-
-/// The smallest grid coordinate whose decoded value is at least `x`, if one exists.
-fn upper_code(origin: Real, exp: i16, x: Real) -> Option<u8> {
-    let guess = ((x as f64 - origin as f64) / pow2(exp as i32) as f64).ceil();
-    let mut q = guess.clamp(0.0, 255.0) as u8;
-    while q < 255 && decode(origin, exp, q) < x {
-        q += 1;
-    }
-    (decode(origin, exp, q) >= x).then_some(q)
 }
 
 /// A child waiting on the traversal stack, with its entry distance.
@@ -227,6 +161,48 @@ impl Bvh {
         (bvh, ordered)
     }
 
+    /// [`Bvh::build`] with every leaf starting at a slot that is a multiple of `align`:
+    /// the leaf-ordered items come back with `None` in the padding slots, and a leaf still
+    /// counts only its items. An owner that packs `align` primitives per SIMD record can
+    /// then test a leaf as whole records.
+    pub fn build_aligned<T>(
+        items: Vec<T>,
+        boxes: &[Aabb],
+        traversal_cost: Real,
+        align: usize,
+    ) -> (Bvh, Vec<Option<T>>) {
+        let (mut bvh, ordered) = Bvh::build(items, boxes, traversal_cost);
+        // Every leaf lane, in slot order (leaves cover the slots once, side by side).
+        let mut leaves: Vec<(u32, usize, usize)> = Vec::new();
+        for (n, node) in bvh.nodes.iter().enumerate() {
+            for lane in 0..node.lanes as usize {
+                if node.count[lane] > 0 {
+                    leaves.push((node.child[lane], n, lane));
+                }
+            }
+        }
+        leaves.sort_unstable();
+        let mut ordered = ordered.into_iter();
+        let mut out: Vec<Option<T>> = Vec::with_capacity(boxes.len() + align * leaves.len());
+        for (_, n, lane) in leaves {
+            let count = bvh.nodes[n].count[lane] as usize;
+            bvh.nodes[n].child[lane] = out.len() as u32;
+            out.extend(ordered.by_ref().take(count).map(Some));
+            out.resize_with(out.len().next_multiple_of(align), || None);
+        }
+        (bvh, out)
+    }
+
+    /// The tree's only leaf, when it is a single one: then traversal visits it directly
+    /// (its box test could only skip a visit that finds nothing, so the result is the
+    /// same) and needs no stack.
+    #[inline]
+    fn single_leaf(&self) -> Option<(u32, u8)> {
+        let root = &self.nodes[0];
+        (self.nodes.len() == 1 && root.lanes == 1 && root.count[0] > 0)
+            .then(|| (root.child[0], root.count[0]))
+    }
+
     /// Bounds of everything.
     pub fn bounds(&self) -> Aabb {
         self.bounds
@@ -246,11 +222,35 @@ impl Bvh {
     where
         F: FnMut(u32, Real) -> Visit,
     {
+        self.traverse_leaves(ray, t_min, t_max, any, each(any, &mut visit))
+    }
+
+    /// [`Bvh::traverse`] a leaf at a time: `visit(first, count, t_max)` tests the
+    /// primitives in slots `first..first + count` together and reports the closest hit
+    /// among them (with `any`, any hit), which shrinks `t_max`.
+    #[inline]
+    pub fn traverse_leaves<F>(
+        &self,
+        ray: &Ray,
+        t_min: Real,
+        t_max: Real,
+        any: bool,
+        mut visit: F,
+    ) -> bool
+    where
+        F: FnMut(u32, u8, Real) -> Visit,
+    {
         if self.nodes.is_empty() {
             return false;
         }
+        if let Some((first, count)) = self.single_leaf() {
+            return matches!(visit(first, count, t_max), Visit::Hit(_));
+        }
         let mut w = Walk::new(ray, t_min, t_max);
-        if self.stack_need <= SHORT_STACK {
+        if self.stack_need <= TINY_STACK {
+            let mut stack = [NO_ENTRY; TINY_STACK];
+            while w.step(&mut stack, &self.nodes, any, &mut visit, &|_, _| {}) {}
+        } else if self.stack_need <= SHORT_STACK {
             let mut stack = [NO_ENTRY; SHORT_STACK];
             while w.step(&mut stack, &self.nodes, any, &mut visit, &|_, _| {}) {}
         } else {
@@ -263,10 +263,11 @@ impl Bvh {
     /// [`Bvh::traverse`] (closest hit) for up to [`BATCH`] rays at once. The rays are
     /// walked in turn, one step each, and every step asks for the memory of the ray's
     /// next step ahead of time (a prefetch: the next node, or through
-    /// `leaf_ahead(first, count)` the records of the next leaf). While one ray waits on memory the others work, so a
-    /// tree much larger than the cache costs fewer stalls. Each ray takes exactly the
-    /// steps it would take alone, so every result is the same as from
-    /// [`Bvh::traverse`]. `visit(r, i, t_max)` tests primitive `i` against `rays[r]`.
+    /// `leaf_ahead(first, count)` the records of the next leaf). While one ray waits on
+    /// memory the others work, so a tree much larger than the cache costs fewer stalls.
+    /// Each ray takes exactly the steps it would take alone, so every result is the same
+    /// as from [`Bvh::traverse`]. `visit(r, i, t_max)` tests primitive `i` against
+    /// `rays[r]`.
     #[inline]
     pub fn traverse_batch<F, L>(
         &self,
@@ -279,8 +280,37 @@ impl Bvh {
         F: FnMut(usize, u32, Real) -> Visit,
         L: Fn(u32, u8),
     {
+        self.traverse_batch_leaves(
+            rays,
+            t_min,
+            t_max,
+            |r, first, count, t| each(false, &mut |i, t| visit(r, i, t))(first, count, t),
+            leaf_ahead,
+        )
+    }
+
+    /// [`Bvh::traverse_batch`] a leaf at a time, as [`Bvh::traverse_leaves`]:
+    /// `visit(r, first, count, t_max)` tests a leaf against `rays[r]`.
+    #[inline]
+    pub fn traverse_batch_leaves<F, L>(
+        &self,
+        rays: &[Ray],
+        t_min: Real,
+        t_max: &[Real],
+        mut visit: F,
+        leaf_ahead: L,
+    ) where
+        F: FnMut(usize, u32, u8, Real) -> Visit,
+        L: Fn(u32, u8),
+    {
         assert!(rays.len() <= BATCH && rays.len() == t_max.len());
         if self.nodes.is_empty() || rays.is_empty() {
+            return;
+        }
+        if let Some((first, count)) = self.single_leaf() {
+            for (r, &t) in t_max.iter().enumerate() {
+                visit(r, first, count, t);
+            }
             return;
         }
         let ahead = |child: u32, count: u8| {
@@ -290,7 +320,9 @@ impl Bvh {
                 leaf_ahead(child, count);
             }
         };
-        if self.stack_need <= SHORT_STACK {
+        if self.stack_need <= TINY_STACK {
+            self.walk_batch::<TINY_STACK>(rays, t_min, t_max, &mut visit, &ahead);
+        } else if self.stack_need <= SHORT_STACK {
             self.walk_batch::<SHORT_STACK>(rays, t_min, t_max, &mut visit, &ahead);
         } else {
             self.walk_batch::<LONG_STACK>(rays, t_min, t_max, &mut visit, &ahead);
@@ -303,7 +335,7 @@ impl Bvh {
         rays: &[Ray],
         t_min: Real,
         t_max: &[Real],
-        visit: &mut impl FnMut(usize, u32, Real) -> Visit,
+        visit: &mut impl FnMut(usize, u32, u8, Real) -> Visit,
         ahead: &impl Fn(u32, u8),
     ) {
         // Slots past the last ray start inactive and are never stepped.
@@ -316,7 +348,13 @@ impl Bvh {
         while active != 0 {
             for (r, (w, stack)) in walks.iter_mut().zip(stacks.iter_mut()).enumerate() {
                 if active & (1 << r) != 0
-                    && !w.step(stack, &self.nodes, false, &mut |i, t| visit(r, i, t), ahead)
+                    && !w.step(
+                        stack,
+                        &self.nodes,
+                        false,
+                        &mut |first, count, t| visit(r, first, count, t),
+                        ahead,
+                    )
                 {
                     active &= !(1 << r);
                 }
@@ -330,6 +368,40 @@ impl Bvh {
         std::mem::size_of_val(self.nodes.as_slice())
     }
 }
+
+/// A leaf visitor (for [`Bvh::traverse_leaves`]) that tests the leaf's primitives one by
+/// one with `visit(i, t_max)`, in slot order, shrinking `t_max` at each hit: the closest
+/// hit of the leaf, the earlier slot on a tie (or, with `any`, the first hit).
+#[inline(always)]
+fn each<F: FnMut(u32, Real) -> Visit>(
+    any: bool,
+    visit: &mut F,
+) -> impl FnMut(u32, u8, Real) -> Visit + '_ {
+    move |first, count, mut t_max| {
+        let mut hit = false;
+        for i in first..first + count as u32 {
+            if let Visit::Hit(t) = visit(i, t_max) {
+                hit = true;
+                t_max = t;
+                if any {
+                    break;
+                }
+            }
+        }
+        if hit {
+            Visit::Hit(t_max)
+        } else {
+            Visit::Miss
+        }
+    }
+}
+
+/// Size of a tree and the records its leaves name (in bytes) above which its owner
+/// walks rays together ([`Bvh::traverse_batch`]): `Aggregate::intersect_many` counts its
+/// nodes and leads, `Mesh::intersect_batch` its nodes and triangle packs. Below it the tree stays in the L2 cache (1 MiB per core on the
+/// development machine), and one ray at a time is faster: at 10⁴ spheres (0.5 MB)
+/// interleaving took 3.87 ms against 3.71 ms, at 10⁵ (5.4 MB) 4.67 ms against 7.11 ms.
+pub const INTERLEAVE_ABOVE: usize = 1 << 20;
 
 /// Rays [`Bvh::traverse_batch`] walks together. Measured on the 10⁶-sphere benchmark
 /// scene (renderer/docs/performance.md): 4 rays took 6.1 ms, 8 took 5.7 ms and 16 took
@@ -362,6 +434,11 @@ pub fn prefetch<T: ?Sized>(x: &T) {
 struct Walk {
     o: [Vec4; 3],
     inv_d: [Vec4; 3],
+    /// Per axis `a`, the index in [`Node::b`] of the slab's near side: `2a` (low) when the
+    /// direction is positive, `2a + 1` (high) when negative (its sign bit: −0 counts).
+    near: [usize; 3],
+    /// Whether a direction component is ±0 (its slabs can give NaN; see [`Node::hit`]).
+    parallel: bool,
     t_min: Real,
     t_max: Real,
     /// The child to take next: an interior node (`count == 0`) or a leaf's slots.
@@ -379,10 +456,27 @@ const NO_ENTRY: Entry = Entry {
 };
 
 impl Walk {
+    /// Pushes lane `lane` of node `n`, entered at `near`.
+    #[inline(always)]
+    fn push(&mut self, stack: &mut [Entry], n: &Node, lane: usize, near: Real) {
+        stack[self.sp] = Entry {
+            child: n.child[lane],
+            count: n.count[lane],
+            near,
+        };
+        self.sp += 1;
+    }
+
     #[inline]
     fn new(ray: &Ray, t_min: Real, t_max: Real) -> Self {
         let inv = Vec3::ONE / ray.d;
         Walk {
+            parallel: ray.d.cmpeq(Vec3::ZERO).any(),
+            near: [
+                ray.d.x.is_sign_negative() as usize,
+                2 + ray.d.y.is_sign_negative() as usize,
+                4 + ray.d.z.is_sign_negative() as usize,
+            ],
             o: [
                 Vec4::splat(ray.o.x),
                 Vec4::splat(ray.o.y),
@@ -410,49 +504,61 @@ impl Walk {
         ahead: &impl Fn(u32, u8),
     ) -> bool
     where
-        F: FnMut(u32, Real) -> Visit,
+        F: FnMut(u32, u8, Real) -> Visit,
     {
         if self.count == 0 {
             let n = &nodes[self.child as usize];
-            let (near, mut mask) = n.hit(&self.o, &self.inv_d, self.t_min, self.t_max);
+            let (near, mask) = n.hit(self);
             if mask != 0 {
-                // The overlapped lanes, sorted nearest first (stable, so ties keep lane
-                // order and the result never depends on anything else).
+                // Take the nearest overlapped lane next and push the others, farthest
+                // first, so they pop nearest first. Ties keep lane order (a stable
+                // order), so the result never depends on anything else. One and two
+                // lanes, the common cases, take no loop.
                 let near = near.to_array();
-                let mut lanes = [0usize; 4];
-                let mut k = 0;
-                while mask != 0 {
-                    let lane = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    let mut j = k;
-                    while j > 0 && near[lanes[j - 1]] > near[lane] {
-                        lanes[j] = lanes[j - 1];
-                        j -= 1;
-                    }
-                    lanes[j] = lane;
-                    k += 1;
-                }
-                for &lane in lanes[1..k].iter().rev() {
-                    stack[self.sp] = Entry {
-                        child: n.child[lane],
-                        count: n.count[lane],
-                        near: near[lane],
+                let first = mask.trailing_zeros() as usize;
+                let rest = mask & (mask - 1);
+                let next = if rest == 0 {
+                    first
+                } else if rest & (rest - 1) == 0 {
+                    let second = rest.trailing_zeros() as usize;
+                    let (a, b) = if near[second] < near[first] {
+                        (second, first)
+                    } else {
+                        (first, second)
                     };
-                    self.sp += 1;
-                }
-                (self.child, self.count) = (n.child[lanes[0]], n.count[lanes[0]]);
+                    self.push(stack, n, b, near[b]);
+                    a
+                } else {
+                    let mut lanes = [0usize; 4];
+                    let mut k = 0;
+                    let mut m = mask;
+                    while m != 0 {
+                        let lane = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let mut j = k;
+                        while j > 0 && near[lanes[j - 1]] > near[lane] {
+                            lanes[j] = lanes[j - 1];
+                            j -= 1;
+                        }
+                        lanes[j] = lane;
+                        k += 1;
+                    }
+                    for &lane in lanes[1..k].iter().rev() {
+                        self.push(stack, n, lane, near[lane]);
+                    }
+                    lanes[0]
+                };
+                (self.child, self.count) = (n.child[next], n.count[next]);
                 ahead(self.child, self.count);
                 return true;
             }
         } else {
-            for i in self.child..self.child + self.count as u32 {
-                if let Visit::Hit(t) = visit(i, self.t_max) {
-                    self.hit = true;
-                    if any {
-                        return false;
-                    }
-                    self.t_max = t;
+            if let Visit::Hit(t) = visit(self.child, self.count, self.t_max) {
+                self.hit = true;
+                if any {
+                    return false;
                 }
+                self.t_max = t;
             }
         }
         // Pop the next child whose box the (possibly shrunk) interval still reaches.
@@ -572,7 +678,7 @@ fn collapse(bin: &[Node2]) -> (Vec<Node>, usize) {
         }
         let mut node = Node::EMPTY;
         let boxes: Vec<Aabb> = kids[..k].iter().map(|&kid| bin[kid].bounds).collect();
-        node.quantize(&boxes);
+        node.set_boxes(&boxes);
         let mut interior = Vec::new();
         for (lane, &kid) in kids[..k].iter().enumerate() {
             let n = &bin[kid];
@@ -654,64 +760,4 @@ fn best_split(
         }
     }
     best
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Decoded child boxes contain the exact ones, for boxes tiny, huge, flat, far from the
-    /// origin and straddling it.
-    #[test]
-    fn quantized_boxes_contain_the_exact_boxes() {
-        let mut state = 5u64;
-        let mut rnd = || {
-            state = crate::sampler::mix64(state.wrapping_add(0x9e37_79b9_7f4a_7c15));
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
-        let mut checked = 0;
-        for scale in [1e-30, 1e-6, 1.0, 1e6, 1e30] {
-            for offset in [0.0, 1.0, -1e5, 3e7, 1e35] {
-                for flat in [false, true] {
-                    let lanes = 1 + (rnd() * 4.0) as usize % 4;
-                    let boxes: Vec<Aabb> = (0..lanes)
-                        .map(|_| {
-                            let p = |r: f64| (offset + (r - 0.5) * scale) as Real;
-                            let a = Vec3::new(p(rnd()), p(rnd()), p(rnd()));
-                            let mut b = Vec3::new(p(rnd()), p(rnd()), p(rnd()));
-                            if flat {
-                                b.y = a.y;
-                            }
-                            Aabb::from_points(a, b)
-                        })
-                        .collect();
-                    let mut node = Node::EMPTY;
-                    node.quantize(&boxes);
-                    assert_eq!(node.lanes as usize, lanes);
-                    for (k, b) in boxes.iter().enumerate() {
-                        for a in 0..3 {
-                            let lo = decode(node.origin[a], node.exp[a], node.qmin[a][k]);
-                            let hi = decode(node.origin[a], node.exp[a], node.qmax[a][k]);
-                            assert!(
-                                lo <= b.min[a] && hi >= b.max[a],
-                                "scale {scale}, offset {offset}, axis {a}: [{lo}, {hi}] does not hold [{}, {}]",
-                                b.min[a],
-                                b.max[a]
-                            );
-                            // Tight: within two grid steps, unless the grid is coarser
-                            // than the coordinates' own spacing.
-                            let step = pow2(node.exp[a] as i32);
-                            let ulp = b.max[a].abs().max(b.min[a].abs()) * Real::EPSILON;
-                            assert!(
-                                hi - lo <= b.max[a] - b.min[a] + 2.0 * step + 4.0 * ulp,
-                                "scale {scale}, offset {offset}: loose box"
-                            );
-                            checked += 1;
-                        }
-                    }
-                }
-            }
-        }
-        assert!(checked > 100);
-    }
 }

@@ -1,9 +1,9 @@
 //! Triangle meshes: shared vertex arrays, a BVH of their own, and the watertight test.
 //! A mesh is held behind an `Arc`, so a mesh instanced a thousand times is stored once.
 
-use super::triangle::{surface, WoopRay};
+use super::triangle::{surface, TriPack, WoopRay};
 use crate::aabb::Aabb;
-use crate::bvh::{Bvh, Visit};
+use crate::bvh::{prefetch, Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
 use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{Real, Vec2, Vec3};
@@ -20,6 +20,20 @@ pub struct Mesh {
     /// Triangles as vertex indices, in BVH leaf order (not file order).
     pub triangles: Vec<[u32; 3]>,
     bvh: Bvh,
+    /// The triangles' vertices, four per pack, in the BVH's slot order: every leaf starts
+    /// a pack, so a leaf is tested a pack (four triangles) at a time with no index array
+    /// in between. (36 bytes per triangle, plus the padding of partly filled packs.)
+    packs: Vec<TriPack>,
+    /// For each pack lane, its triangle's index in `triangles` (`u32::MAX` for padding).
+    pack_tris: Vec<[u32; 4]>,
+}
+
+/// The closest hit so far in a mesh search: the triangle, `t` and the barycentrics.
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    tri: u32,
+    t: Real,
+    b: [Real; 3],
 }
 
 /// Why a mesh is invalid.
@@ -73,13 +87,30 @@ impl Mesh {
                 b
             })
             .collect();
-        let (bvh, triangles) = Bvh::build(triangles, &boxes, 1.0);
+        let (bvh, slots) = Bvh::build_aligned(triangles, &boxes, 1.0, 4);
+        let mut triangles = Vec::with_capacity(boxes.len());
+        let (mut packs, mut pack_tris) = (Vec::new(), Vec::new());
+        for chunk in slots.chunks(4) {
+            let mut verts = Vec::with_capacity(4);
+            let mut ids = [u32::MAX; 4];
+            for (lane, t) in chunk.iter().enumerate() {
+                if let Some(t) = t {
+                    ids[lane] = triangles.len() as u32;
+                    verts.push(t.map(|k| positions[k as usize]));
+                    triangles.push(*t);
+                }
+            }
+            packs.push(TriPack::new(&verts));
+            pack_tris.push(ids);
+        }
         Ok(Mesh {
             positions,
             normals,
             uvs,
             triangles,
             bvh,
+            packs,
+            pack_tris,
         })
     }
 
@@ -144,21 +175,105 @@ impl Mesh {
         ]
     }
 
-    /// Closest hit.
+    /// Closest hit. The search keeps only the closest `t` and its triangle; the hit
+    /// record (point, normals, uv) is built once, for the winner.
     pub fn intersect(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         let wr = WoopRay::new(ray);
-        let mut best: Option<(Real, [Real; 3], u32)> = None;
-        self.bvh.traverse(ray, t_min, t_max, false, |i, tmax| {
-            let [p0, p1, p2] = self.vertices(i as usize);
-            match wr.hit(p0, p1, p2, t_min, tmax) {
-                Some((t, b)) => {
-                    best = Some((t, b, i));
-                    Visit::Hit(t)
-                }
-                None => Visit::Miss,
+        let mut best: Option<Candidate> = None;
+        self.bvh
+            .traverse_leaves(ray, t_min, t_max, false, |first, count, tmax| {
+                self.visit_leaf(&wr, first, count, t_min, tmax, &mut best)
+            });
+        best.map(|c| self.finish(c))
+    }
+
+    /// [`Mesh::intersect`] for up to [`BATCH`] rays, each with its own `t_max`. When the
+    /// mesh's tree and triangles are larger than [`INTERLEAVE_ABOVE`], the rays walk it
+    /// together ([`Bvh::traverse_batch_leaves`], each step prefetching the next node or
+    /// the next leaf's packs), so one ray's cache misses overlap the others' work; each
+    /// ray takes exactly the steps it takes alone.
+    pub fn intersect_batch(
+        &self,
+        rays: &[Ray],
+        t_min: Real,
+        t_max: &[Real],
+        out: &mut [Option<Hit>],
+    ) {
+        if !self.interleaves() {
+            for ((r, &tm), o) in rays.iter().zip(t_max).zip(out.iter_mut()) {
+                *o = self.intersect(r, t_min, tm);
             }
-        });
-        let (t, b, i) = best?;
+            return;
+        }
+        let mut wrs = [WoopRay::new(&Ray::new(Vec3::ZERO, Vec3::ONE)); BATCH];
+        for (w, r) in wrs.iter_mut().zip(rays) {
+            *w = WoopRay::new(r);
+        }
+        let mut best: [Option<Candidate>; BATCH] = [None; BATCH];
+        self.bvh.traverse_batch_leaves(
+            rays,
+            t_min,
+            t_max,
+            |r, first, count, tmax| {
+                self.visit_leaf(&wrs[r], first, count, t_min, tmax, &mut best[r])
+            },
+            |first, count| {
+                let first = first as usize / 4;
+                prefetch(&self.packs[first..first + (count as usize).div_ceil(4)])
+            },
+        );
+        for (o, b) in out.iter_mut().zip(best) {
+            *o = b.map(|c| self.finish(c));
+        }
+    }
+
+    /// Whether [`Mesh::intersect_batch`] walks rays together: whether the tree and the
+    /// packs take more than [`INTERLEAVE_ABOVE`] bytes.
+    pub fn interleaves(&self) -> bool {
+        self.bvh.node_bytes() + std::mem::size_of_val(self.packs.as_slice()) > INTERLEAVE_ABOVE
+    }
+
+    /// Tests a leaf (slots `first..first + count`, starting a pack) pack by pack, keeping
+    /// a closer hit in `best` as (triangle, t).
+    #[inline(always)]
+    fn visit_leaf(
+        &self,
+        wr: &WoopRay,
+        first: u32,
+        count: u8,
+        t_min: Real,
+        mut t_max: Real,
+        best: &mut Option<Candidate>,
+    ) -> Visit {
+        let (first, count) = (first as usize / 4, count as usize);
+        let mut hit = false;
+        for (k, pack) in self.packs[first..first + count.div_ceil(4)]
+            .iter()
+            .enumerate()
+        {
+            let lanes = (count - 4 * k).min(4);
+            if let Some((lane, t, b)) = wr.hit4(pack, lanes, t_min, t_max) {
+                *best = Some(Candidate {
+                    tri: self.pack_tris[first + k][lane],
+                    t,
+                    b,
+                });
+                t_max = t;
+                hit = true;
+            }
+        }
+        if hit {
+            Visit::Hit(t_max)
+        } else {
+            Visit::Miss
+        }
+    }
+
+    /// The hit record of the winning candidate (built once per ray, for the closest hit
+    /// only).
+    #[inline]
+    fn finish(&self, c: Candidate) -> Hit {
+        let (i, t, b) = (c.tri, c.t, c.b);
         let [p0, p1, p2] = self.vertices(i as usize);
         let tri = self.triangles[i as usize];
         let pick3 = |v: &Vec<Vec3>| [v[tri[0] as usize], v[tri[1] as usize], v[tri[2] as usize]];
@@ -167,25 +282,31 @@ impl Mesh {
             .uvs
             .as_ref()
             .map(|v| [v[tri[0] as usize], v[tri[1] as usize], v[tri[2] as usize]]);
-        Some(surface(
+        surface(
             t,
             b,
             [p0, p1, p2],
             (p1 - p0).cross(p2 - p0),
             n.as_ref(),
             uv.as_ref(),
-        ))
+        )
     }
 
     /// Whether any triangle is hit.
     pub fn occluded(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
         let wr = WoopRay::new(ray);
-        self.bvh.traverse(ray, t_min, t_max, true, |i, tmax| {
-            let [p0, p1, p2] = self.vertices(i as usize);
-            match wr.hit(p0, p1, p2, t_min, tmax) {
-                Some((t, _)) => Visit::Hit(t),
-                None => Visit::Miss,
-            }
-        })
+        self.bvh
+            .traverse_leaves(ray, t_min, t_max, true, |first, count, tmax| {
+                let (first, count) = (first as usize / 4, count as usize);
+                for (k, pack) in self.packs[first..first + count.div_ceil(4)]
+                    .iter()
+                    .enumerate()
+                {
+                    if let Some((_, t, _)) = wr.hit4(pack, (count - 4 * k).min(4), t_min, tmax) {
+                        return Visit::Hit(t);
+                    }
+                }
+                Visit::Miss
+            })
     }
 }

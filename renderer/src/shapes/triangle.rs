@@ -7,7 +7,7 @@
 use crate::aabb::Aabb;
 use crate::hit::Hit;
 use crate::ray::Ray;
-use crate::real::{gamma, Real, Vec2, Vec3};
+use crate::real::{gamma, Real, Vec2, Vec3, Vec4};
 
 /// A ray prepared for many triangle tests.
 #[derive(Clone, Copy, Debug)]
@@ -89,6 +89,134 @@ impl WoopRay {
         }
         let inv = 1.0 / det;
         Some((t, [u * inv, v * inv, w * inv]))
+    }
+}
+
+/// Four triangles side by side for [`WoopRay::hit4`]: `v[3·k + a]` holds coordinate `a`
+/// of vertex `k` of the four triangles, one per lane.
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug)]
+pub struct TriPack {
+    pub(crate) v: [[Real; 4]; 9],
+}
+
+impl TriPack {
+    /// Packs up to four triangles (missing lanes are zero and must be masked off).
+    pub fn new(tris: &[[Vec3; 3]]) -> TriPack {
+        let mut v = [[0.0; 4]; 9];
+        for (lane, t) in tris.iter().enumerate() {
+            for k in 0..3 {
+                for a in 0..3 {
+                    v[3 * k + a][lane] = t[k][a];
+                }
+            }
+        }
+        TriPack { v }
+    }
+
+    /// The vertices of the triangle in `lane`.
+    #[inline]
+    pub fn triangle(&self, lane: usize) -> [Vec3; 3] {
+        let p = |k: usize| {
+            Vec3::new(
+                self.v[3 * k][lane],
+                self.v[3 * k + 1][lane],
+                self.v[3 * k + 2][lane],
+            )
+        };
+        [p(0), p(1), p(2)]
+    }
+}
+
+impl WoopRay {
+    /// [`WoopRay::hit`] on the first `lanes` triangles of a pack at once: the lane of the
+    /// closest hit with `t_min < t < t_max` (the lowest lane on a tie, as testing them in
+    /// order would give), its `t` and barycentrics. Each lane computes exactly what the scalar test
+    /// computes, operation for operation; a lane whose edge function is exactly 0 (which
+    /// the scalar test redoes in `f64`) is handed to the scalar test. So the result is the
+    /// scalar loop's, bit for bit.
+    #[inline]
+    pub fn hit4(
+        &self,
+        pack: &TriPack,
+        lanes: usize,
+        t_min: Real,
+        t_max: Real,
+    ) -> Option<(usize, Real, [Real; 3])> {
+        let [kx, ky, kz] = self.k;
+        let [sx, sy, sz] = self.s;
+        let (sx, sy, sz) = (Vec4::splat(sx), Vec4::splat(sy), Vec4::splat(sz));
+        let o = [
+            Vec4::splat(self.o[kx]),
+            Vec4::splat(self.o[ky]),
+            Vec4::splat(self.o[kz]),
+        ];
+        // Vertex k relative to the origin, in the permuted axes, sheared.
+        let rel = |k: usize| {
+            let (x, y, z) = (
+                Vec4::from_array(pack.v[3 * k + kx]) - o[0],
+                Vec4::from_array(pack.v[3 * k + ky]) - o[1],
+                Vec4::from_array(pack.v[3 * k + kz]) - o[2],
+            );
+            (x - sx * z, y - sy * z, z)
+        };
+        let (ax, ay, az) = rel(0);
+        let (bx, by, bz) = rel(1);
+        let (cx, cy, cz) = rel(2);
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let zero = Vec4::ZERO;
+        // The lanes in use, and those whose edge function is exactly 0 (the scalar test
+        // redoes them in f64).
+        let live = Vec4::new(0.0, 1.0, 2.0, 3.0).cmplt(Vec4::splat(lanes as Real));
+        let exact = (u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero)) & live;
+        let neg = u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero);
+        let pos = u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero);
+        let det = u + v + w;
+        let t = (u * (sz * az) + v * (sz * bz) + w * (sz * cz)) / det;
+        let accepted = !(neg & pos)
+            & det.cmpne(zero)
+            & t.cmpgt(Vec4::splat(t_min))
+            & t.cmplt(Vec4::splat(t_max))
+            & live
+            & !exact;
+        let (exact, ok) = (exact.bitmask(), accepted.bitmask());
+        // A lane's barycentrics, as the scalar test computes them.
+        let bary = |lane: usize| {
+            let (u, v, w) = (u.to_array()[lane], v.to_array()[lane], w.to_array()[lane]);
+            let inv = 1.0 / det.to_array()[lane];
+            [u * inv, v * inv, w * inv]
+        };
+        if exact == 0 {
+            // The closest accepted lane, the lowest on a tie, without a loop.
+            if ok == 0 {
+                return None;
+            }
+            let masked = Vec4::select(accepted, t, Vec4::INFINITY);
+            let tmin = masked.min_element();
+            let lane = (masked.cmpeq(Vec4::splat(tmin)).bitmask() & ok).trailing_zeros() as usize;
+            return Some((lane, tmin, bary(lane)));
+        }
+        let tl = t.to_array();
+        let mut best: Option<(usize, Real, [Real; 3])> = None;
+        for lane in 0..lanes {
+            let hit = if exact & (1 << lane) != 0 {
+                let [p0, p1, p2] = pack.triangle(lane);
+                match self.hit(p0, p1, p2, t_min, t_max) {
+                    Some((t, b)) => (t, b),
+                    None => continue,
+                }
+            } else if ok & (1 << lane) != 0 {
+                (tl[lane], bary(lane))
+            } else {
+                continue;
+            };
+            if best.is_none_or(|(_, tb, _)| hit.0 < tb) {
+                best = Some((lane, hit.0, hit.1));
+            }
+        }
+        best
     }
 }
 
