@@ -479,15 +479,17 @@ impl Aggregate {
             // walk rays together through, which the instance's batch does. (The single
             // leaf's box test is skipped, as `Bvh::traverse` does.) The unbounded
             // instances go first and bound each ray's search, as in `intersect`.
+            if self.unbounded().is_empty() {
+                self.instances[0].local_hit_batch(rays, t_min, t_max, out);
+                for o in out.iter_mut() {
+                    *o = o.map(|h| self.finish(0, h));
+                }
+                return;
+            }
             let mut bound = [0.0; BATCH];
             let mut unbounded: [Option<(usize, Hit)>; BATCH] = [None; BATCH];
-            let any_unbounded = !self.unbounded().is_empty();
             for (r, ray) in rays.iter().enumerate() {
-                (unbounded[r], bound[r]) = if any_unbounded {
-                    self.nearest_unbounded(ray, t_min, t_max[r])
-                } else {
-                    (None, t_max[r])
-                };
+                (unbounded[r], bound[r]) = self.nearest_unbounded(ray, t_min, t_max[r]);
             }
             self.instances[0].local_hit_batch(rays, t_min, &bound[..rays.len()], out);
             for (o, u) in out.iter_mut().zip(unbounded) {

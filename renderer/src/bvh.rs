@@ -344,10 +344,10 @@ impl Bvh {
             Walk::new(&rays[k], t_min, t_max[k])
         });
         let mut stacks = [[NO_ENTRY; STACK]; BATCH];
-        let mut active: u32 = (1 << rays.len()) - 1;
+        let mut active: u64 = (1u64 << rays.len()) - 1;
         while active != 0 {
             for (r, (w, stack)) in walks.iter_mut().zip(stacks.iter_mut()).enumerate() {
-                if active & (1 << r) != 0
+                if active & (1u64 << r) != 0
                     && !w.step(
                         stack,
                         &self.nodes,
@@ -356,7 +356,7 @@ impl Bvh {
                         ahead,
                     )
                 {
-                    active &= !(1 << r);
+                    active &= !(1u64 << r);
                 }
             }
         }
