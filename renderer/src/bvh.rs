@@ -11,6 +11,7 @@
 use crate::aabb::Aabb;
 use crate::ray::Ray;
 use crate::real::{gamma, Real, Vec3, Vec4};
+use arrayvec::ArrayVec;
 
 const BINS: usize = 16;
 const MAX_LEAF: usize = 4;
@@ -248,13 +249,13 @@ impl Bvh {
         }
         let mut w = Walk::new(ray, t_min, t_max);
         if self.stack_need <= TINY_STACK {
-            let mut stack = [NO_ENTRY; TINY_STACK];
+            let mut stack = ArrayVec::<Entry, TINY_STACK>::new();
             while w.step(&mut stack, &self.nodes, any, &mut visit, &|_, _| {}) {}
         } else if self.stack_need <= SHORT_STACK {
-            let mut stack = [NO_ENTRY; SHORT_STACK];
+            let mut stack = ArrayVec::<Entry, SHORT_STACK>::new();
             while w.step(&mut stack, &self.nodes, any, &mut visit, &|_, _| {}) {}
         } else {
-            let mut stack = [NO_ENTRY; LONG_STACK];
+            let mut stack = ArrayVec::<Entry, LONG_STACK>::new();
             while w.step(&mut stack, &self.nodes, any, &mut visit, &|_, _| {}) {}
         }
         w.hit
@@ -343,7 +344,7 @@ impl Bvh {
             let k = r.min(rays.len() - 1);
             Walk::new(&rays[k], t_min, t_max[k])
         });
-        let mut stacks = [[NO_ENTRY; STACK]; BATCH];
+        let mut stacks: [ArrayVec<Entry, STACK>; BATCH] = std::array::from_fn(|_| ArrayVec::new());
         let mut active: u64 = (1u64 << rays.len()) - 1;
         while active != 0 {
             for (r, (w, stack)) in walks.iter_mut().zip(stacks.iter_mut()).enumerate() {
@@ -445,26 +446,19 @@ struct Walk {
     child: u32,
     count: u8,
     hit: bool,
-    /// Entries on the stack.
-    sp: usize,
 }
-
-const NO_ENTRY: Entry = Entry {
-    child: 0,
-    count: 0,
-    near: 0.0,
-};
 
 impl Walk {
     /// Pushes lane `lane` of node `n`, entered at `near`.
     #[inline(always)]
-    fn push(&mut self, stack: &mut [Entry], n: &Node, lane: usize, near: Real) {
-        stack[self.sp] = Entry {
+    fn push<const N: usize>(stack: &mut ArrayVec<Entry, N>, n: &Node, lane: usize, near: Real) {
+        // The stack holds 3 entries per level below the root plus one (`stack_need`),
+        // which is what a traversal can push, so it never overflows.
+        stack.push(Entry {
             child: n.child[lane],
             count: n.count[lane],
             near,
-        };
-        self.sp += 1;
+        });
     }
 
     #[inline]
@@ -488,16 +482,15 @@ impl Walk {
             child: 0,
             count: 0,
             hit: false,
-            sp: 0,
         }
     }
 
     /// Tests the current node or visits the current leaf, then moves to the next child
     /// to take, and passes it to `ahead`. Returns false once the traversal is over.
     #[inline(always)]
-    fn step<F>(
+    fn step<const N: usize, F>(
         &mut self,
-        stack: &mut [Entry],
+        stack: &mut ArrayVec<Entry, N>,
         nodes: &[Node],
         any: bool,
         visit: &mut F,
@@ -526,7 +519,7 @@ impl Walk {
                     } else {
                         (first, second)
                     };
-                    self.push(stack, n, b, near[b]);
+                    Walk::push(stack, n, b, near[b]);
                     a
                 } else {
                     let mut lanes = [0usize; 4];
@@ -544,7 +537,7 @@ impl Walk {
                         k += 1;
                     }
                     for &lane in lanes[1..k].iter().rev() {
-                        self.push(stack, n, lane, near[lane]);
+                        Walk::push(stack, n, lane, near[lane]);
                     }
                     lanes[0]
                 };
@@ -563,9 +556,7 @@ impl Walk {
         }
         // Pop the next child whose box the (possibly shrunk) interval still reaches.
         let grow = 1.0 + 2.0 * gamma(3);
-        while self.sp > 0 {
-            self.sp -= 1;
-            let e = stack[self.sp];
+        while let Some(e) = stack.pop() {
             if e.near <= self.t_max * grow {
                 (self.child, self.count) = (e.child, e.count);
                 ahead(self.child, self.count);

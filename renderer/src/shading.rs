@@ -74,6 +74,9 @@ pub struct Shader<'a> {
     pub spawn: Spawn,
     /// POV-Ray's shadow tolerance, applied at the light end of shadow rays.
     pub shadow_tolerance: Real,
+    /// Whether every material is opaque: then a shadow ray only asks whether anything
+    /// blocks it (any hit, which stops at the first blocker), not what.
+    opaque: bool,
 }
 
 impl<'a> Shader<'a> {
@@ -83,6 +86,10 @@ impl<'a> Shader<'a> {
             scene,
             spawn,
             shadow_tolerance: 1e-3,
+            opaque: scene
+                .materials
+                .iter()
+                .all(|m| m.filter == 0.0 && m.transmit == 0.0),
         }
     }
 
@@ -267,6 +274,15 @@ impl<'a> Shader<'a> {
     fn shadow(&self, p: Vec3, err: Vec3, n_geo: Vec3, l: Vec3, dist: Real) -> Color {
         let (mut ray, t_min) = self.spawn.ray(p, err, n_geo, l);
         let mut remaining = dist - self.shadow_tolerance;
+        if self.opaque {
+            // The first blocker decides, and any blocker is opaque: the same answer as
+            // the loop below gives, found sooner.
+            return if self.scene.root.occluded(&ray, t_min, remaining) {
+                Color::ZERO
+            } else {
+                Color::ONE
+            };
+        }
         let mut t_min = t_min;
         let mut filter = Color::ONE;
         // Follow the shadow ray through transparent blockers (bounded, allocation-free).
