@@ -550,3 +550,159 @@ fn interleaved_rays_match_one_at_a_time() {
         assert!(hits > 300, "n = {n}: only {hits} rays hit");
     }
 }
+
+/// A mesh tests the triangles of a leaf four at a time (one SIMD pack) and builds the hit
+/// record once, for the winner. That must be the scalar watertight test exactly: every
+/// field of the hit equal, bit for bit, to the closest hit of the triangles tested one by
+/// one — also where an edge function is exactly 0 (rays through shared vertices and edges
+/// of an integer grid, which the scalar test redoes in f64) and on degenerate triangles.
+/// Where two triangles tie at the closest t (a ray through a shared edge), the search
+/// may return either: then t itself must be the same bits.
+#[test]
+fn mesh_packs_match_the_scalar_test_bit_for_bit() {
+    // A bumpy sphere, plus an integer grid (exact zero edge functions at its vertices and
+    // edges) and degenerate triangles, in one mesh.
+    let sphere = bumpy_sphere(40, 56, 23);
+    let mut pos = sphere.positions.clone();
+    let mut tris = sphere.triangles.clone();
+    let base = pos.len() as u32;
+    let n = 12;
+    for j in 0..=n {
+        for i in 0..=n {
+            pos.push(Vec3::new(i as Real - 6.0, -2.0, j as Real - 6.0));
+        }
+    }
+    let at = |i: u32, j: u32| base + j * (n + 1) + i;
+    for j in 0..n {
+        for i in 0..n {
+            tris.push([at(i, j), at(i, j + 1), at(i + 1, j)]);
+            tris.push([at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)]);
+        }
+    }
+    tris.push([at(0, 0), at(0, 0), at(1, 1)]); // two equal vertices
+    tris.push([at(0, 0), at(1, 1), at(2, 2)]); // collinear
+    let mesh = Mesh::new(pos, None, None, tris).unwrap();
+    let one_by_one: Vec<Triangle> = (0..mesh.triangles.len())
+        .map(|i| Triangle {
+            p: mesh.vertices(i),
+            n: None,
+            uv: None,
+        })
+        .collect();
+    let mut rng = SplitMix(31);
+    let mut rays = Vec::new();
+    for _ in 0..6000 {
+        let o = rng.unit() * rng.range(0.0, 5.0);
+        let d = rng.vec(-1.5, 1.5) - o;
+        rays.push(Ray::new(vec3(o), vec3(d)));
+    }
+    // Straight down onto grid vertices and edge midpoints, and through the sphere's
+    // vertices from its centre.
+    for j in 0..=2 * n {
+        for i in 0..=2 * n {
+            let (x, z) = (i as f64 * 0.5 - 6.0, j as f64 * 0.5 - 6.0);
+            rays.push(Ray::new(
+                vec3(DVec3::new(x, 3.0, z)),
+                vec3(DVec3::new(0.0, -1.0, 0.0)),
+            ));
+        }
+    }
+    for &v in sphere.positions.iter().step_by(3) {
+        rays.push(Ray::new(Vec3::ZERO, v));
+    }
+    let (mut unique, mut ties) = (0, 0);
+    for (k, r) in rays.iter().enumerate() {
+        let got = mesh.intersect(r, 0.0, INF);
+        let want = brute_force_triangles(&one_by_one, r, 0.0, INF);
+        let tied = want.is_some_and(|w| {
+            one_by_one
+                .iter()
+                .filter(|t| t.intersect(r, 0.0, INF).is_some_and(|h| h.t == w.t))
+                .count()
+                > 1
+        });
+        if tied {
+            ties += 1;
+            assert_eq!(
+                got.map(|h| h.t.to_bits()),
+                want.map(|h| h.t.to_bits()),
+                "ray {k} (a tie): {r:?}"
+            );
+        } else {
+            unique += want.is_some() as usize;
+            assert_eq!(hit_bits(&got), hit_bits(&want), "ray {k}: {r:?}");
+        }
+        assert_eq!(mesh.occluded(r, 0.0, INF), want.is_some(), "ray {k}");
+    }
+    assert!(
+        unique > 3000 && ties > 100,
+        "{unique} unique hits, {ties} ties"
+    );
+}
+
+/// A large mesh walks the rays of a batch together (`Mesh::intersect_batch`, through
+/// `Aggregate::intersect_many` when the mesh is the scene's one bounded instance). Each
+/// ray must get exactly what `intersect` gives it alone, with its own interval; on a small
+/// mesh that does not interleave too, with a transform and beside a plane.
+#[test]
+fn mesh_batches_match_one_ray_at_a_time() {
+    let mut rng = SplitMix(41);
+    for (mesh, interleaved) in [
+        (bumpy_sphere(200, 300, 3), true),
+        (bumpy_sphere(12, 16, 4), false),
+    ] {
+        let mesh = Arc::new(mesh);
+        assert_eq!(mesh.interleaves(), interleaved);
+        let placed = |xf: Option<Transform>| Instance {
+            shape: Shape::Mesh(mesh.clone()),
+            xf,
+            material: 1,
+            object_id: 1,
+        };
+        let plane = Instance {
+            shape: Shape::Plane,
+            xf: Some(Transform::new(&Affine64::translate(DVec3::new(0.0, -0.9, 0.0))).unwrap()),
+            material: 2,
+            object_id: 2,
+        };
+        let turned = Transform::new(&random_affine(&mut rng, 0.3, 1.0)).unwrap();
+        for agg in [
+            Aggregate::new(vec![placed(None)]),
+            Aggregate::new(vec![placed(Some(turned))]),
+            Aggregate::new(vec![placed(None), plane.clone()]),
+        ] {
+            let mut hits = 0;
+            for call in 0..120 {
+                let rays: Vec<Ray> = (0..1 + call % 37)
+                    .map(|_| {
+                        let o = rng.unit() * rng.range(1.5, 4.0);
+                        Ray::new(vec3(o), vec3(rng.vec(-1.0, 1.0) - o))
+                    })
+                    .collect();
+                let t_max = if call % 3 == 0 {
+                    rng.range(0.5, 3.0) as Real
+                } else {
+                    INF
+                };
+                let mut out = vec![None; rays.len()];
+                agg.intersect_many(&rays, 0.0, t_max, &mut out);
+                let mut direct = vec![None; rays.len()];
+                let bounds = vec![t_max; rays.len()];
+                for (chunk, (rs, o)) in rays.chunks(16).zip(direct.chunks_mut(16)).enumerate() {
+                    mesh.intersect_batch(rs, 0.0, &bounds[16 * chunk..16 * chunk + rs.len()], o);
+                }
+                for (k, r) in rays.iter().enumerate() {
+                    let alone = agg.intersect(r, 0.0, t_max);
+                    assert_eq!(hit_bits(&out[k]), hit_bits(&alone), "call {call}, ray {k}");
+                    assert_eq!(
+                        hit_bits(&direct[k]),
+                        hit_bits(&mesh.intersect(r, 0.0, t_max)),
+                        "call {call}, ray {k}, mesh batch"
+                    );
+                    hits += alone.is_some() as usize;
+                }
+            }
+            assert!(hits > 500, "only {hits} hits");
+        }
+    }
+}
