@@ -194,9 +194,8 @@ impl Bvh {
         (bvh, out)
     }
 
-    /// The tree's only leaf, when it is a single one: then traversal visits it directly
-    /// (its box test could only skip a visit that finds nothing, so the result is the
-    /// same) and needs no stack.
+    /// The tree's only leaf, when it is a single one: then traversal tests the tree's
+    /// bounds and visits the leaf directly, with no walk and no stack.
     #[inline]
     fn single_leaf(&self) -> Option<(u32, u8)> {
         let root = &self.nodes[0];
@@ -245,6 +244,15 @@ impl Bvh {
             return false;
         }
         if let Some((first, count)) = self.single_leaf() {
+            // The leaf's box (the tree's bounds) still rejects the rays that miss it, as
+            // cheaply as the root's slab test would, without a walk or a stack.
+            if self
+                .bounds
+                .hit(ray.o, Vec3::ONE / ray.d, t_min, t_max)
+                .is_none()
+            {
+                return false;
+            }
             return matches!(visit(first, count, t_max), Visit::Hit(_));
         }
         let mut w = Walk::new(ray, t_min, t_max);

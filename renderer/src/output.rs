@@ -27,8 +27,28 @@ pub fn srgb_encode(x: f32) -> f32 {
     }
 }
 
+/// The 8-bit sRGB code of a linear value in [0, 1]: the code k whose encoded value k/255
+/// is nearest to the exact sRGB encoding of `x`. It is found by comparing `x` with the
+/// 255 linear values at which the nearest code changes (the decoded half-codes, computed
+/// once in f64), so it costs a few comparisons instead of a `powf` per channel.
+pub fn srgb8(x: f32) -> u8 {
+    static STEPS: std::sync::LazyLock<[f32; 255]> = std::sync::LazyLock::new(|| {
+        std::array::from_fn(|k| {
+            let e = (k as f64 + 0.5) / 255.0;
+            let linear = if e <= 0.04045 {
+                e / 12.92
+            } else {
+                ((e + 0.055) / 1.055).powf(2.4)
+            };
+            linear as f32
+        })
+    });
+    STEPS.partition_point(|&t| t <= x) as u8
+}
+
 /// 8-bit RGB pixels of `img` under a device mapping.
 pub fn to_rgb8(img: &Image, map: ToneMap) -> Vec<u8> {
+    use rayon::prelude::*;
     let (lo, hi) = match map {
         ToneMap::MinMax => img
             .rgb
@@ -40,15 +60,14 @@ pub fn to_rgb8(img: &Image, map: ToneMap) -> Vec<u8> {
     };
     let span = if hi > lo { hi - lo } else { 1.0 };
     img.rgb
-        .iter()
+        .par_iter()
         .map(|&v| {
             let x = ((v - lo) / span).clamp(0.0, 1.0);
-            let y = if map == ToneMap::Srgb {
-                srgb_encode(x)
+            if map == ToneMap::Srgb {
+                srgb8(x)
             } else {
-                x
-            };
-            (y * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+                (x * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+            }
         })
         .collect()
 }

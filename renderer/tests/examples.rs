@@ -162,6 +162,27 @@ fn test05_srgb_mapping() {
     assert_eq!(srgb_encode(0.0), 0.0);
     assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
     assert!((srgb_encode(0.18) - 0.4614).abs() < 1e-3);
+    // The 8-bit code is the one nearest the exact encoding (computed here in f64), at every
+    // step of a fine sweep and at both ends.
+    use renderer::output::srgb8;
+    assert_eq!(
+        (srgb8(0.0), srgb8(1.0), srgb8(-0.5), srgb8(7.0)),
+        (0, 255, 0, 255)
+    );
+    for i in 0..=200_000 {
+        let x = (i as f64 / 200_000.0).powi(2) as f32;
+        let e = x as f64;
+        let exact = if e <= 0.0031308 {
+            12.92 * e
+        } else {
+            1.055 * e.powf(1.0 / 2.4) - 0.055
+        } * 255.0;
+        let got = srgb8(x) as f64;
+        assert!(
+            (got - exact).abs() <= 0.5 + 1e-4,
+            "srgb8({x}) = {got}, exact encoding {exact}"
+        );
+    }
     let img = Image {
         width: 2,
         height: 1,
