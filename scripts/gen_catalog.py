@@ -55,6 +55,14 @@ color = [0.7, 0.72, 0.75]
 """
 
 
+FLOOR = """
+[[objects]]
+type = "plane"
+material = "floor"
+transform = [{ translate = [0, -1, 0] }]
+"""
+
+
 def write(name, text):
     path = os.path.join(OUT, name + ".toml")
     with open(path, "w") as f:
@@ -222,12 +230,7 @@ transform = [{{ rotate = {{ axis = [0, 1, 0], degrees = {ang} }} }}, {{ translat
 
 
 def shading():
-    floor = """
-[[objects]]
-type = "plane"
-material = "floor"
-transform = [{ translate = [0, -1, 0] }]
-"""
+    floor = FLOOR
     def one(name, finish, comment, lights=LIGHT, objects=None, extra_render=""):
         mat = f"\n# {comment}\n[materials.test]\n{finish}\n"
         objs = objects or """
@@ -364,12 +367,7 @@ diffuse = 0.05
 filter = 0.9
 ior = 1.5
 """
-    objs = """
-[[objects]]
-type = "plane"
-material = "floor"
-transform = [{ translate = [0, -1, 0] }]
-
+    objs = FLOOR + """
 [[objects]]
 type = "sphere"
 material = "shiny"
@@ -401,12 +399,7 @@ at = [0.4, -1, -0.5]
 up = [0, 1, 0]
 fov = 4
 """
-    disk = """
-[[objects]]
-type = "plane"
-material = "floor"
-transform = [{ translate = [0, -1, 0] }]
-
+    disk = FLOOR + """
 [[objects]]
 type = "disk"
 material = "matte"

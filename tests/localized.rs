@@ -14,7 +14,7 @@ use glam::{DMat3, DVec3};
 use renderer::aggregate::{Aggregate, Instance};
 use renderer::camera::{Camera, Window};
 use renderer::render::{render, Options};
-use renderer::scene::Scene;
+use renderer::scene::{Material, Scene};
 use renderer::shapes::Shape;
 use renderer::spawn::Spawn;
 use renderer::transform::{Affine64, Transform};
@@ -104,35 +104,38 @@ fn test01_the_retrace_reproduces_every_catalog_pixel() {
     );
 }
 
-#[test]
-fn test02_a_phong_exponent_2_percent_off_on_one_small_sphere_fails() {
-    let name = "loc_small_objects";
+/// Requires `fault`, applied to the named material of `name`, to be caught.
+fn assert_material_fault_caught(
+    name: &str,
+    material_name: &str,
+    fault: &str,
+    f: fn(&mut Material),
+) {
     let mut s = scene(name);
     let opts = Options::default();
     let good = against(&s, &opts, name);
-    let k = material(&s, "shiny");
-    s.materials[k].phong_size *= 1.02;
-    assert_caught(
+    let k = material(&s, material_name);
+    f(&mut s.materials[k]);
+    assert_caught(fault, name, &good, &against(&s, &opts, name));
+}
+
+#[test]
+fn test02_a_phong_exponent_2_percent_off_on_one_small_sphere_fails() {
+    assert_material_fault_caught(
+        "loc_small_objects",
+        "shiny",
         "phong_size 2 % off on the small sphere",
-        name,
-        &good,
-        &against(&s, &opts, name),
+        |m| m.phong_size *= 1.02,
     );
 }
 
 #[test]
 fn test03_an_ior_1_percent_off_on_one_glass_sphere_fails() {
-    let name = "loc_small_objects";
-    let mut s = scene(name);
-    let opts = Options::default();
-    let good = against(&s, &opts, name);
-    let k = material(&s, "glass");
-    s.materials[k].ior *= 1.01;
-    assert_caught(
+    assert_material_fault_caught(
+        "loc_small_objects",
+        "glass",
         "ior 1 % off on the glass sphere",
-        name,
-        &good,
-        &against(&s, &opts, name),
+        |m| m.ior *= 1.01,
     );
 }
 

@@ -484,32 +484,27 @@ mod tests {
         assert_eq!(c.failing, W * H);
     }
 
+    /// [`step`] on one object, reflecting or transmitting or not.
+    fn on_one_object(edge: f64, secondary: bool) -> impl Fn(f64, f64) -> Sample {
+        move |x, y| Sample {
+            secondary,
+            object: 3,
+            ..step(edge)(x, y)
+        }
+    }
+
     #[test]
     fn edges_seen_in_glass_and_on_one_surface_are_told_apart() {
-        let glass = |x: f64, y: f64| Sample {
-            secondary: true,
-            object: 3,
-            ..step(10.5 + 4e-4)(x, y)
-        };
-        let glass_ref = |x: f64, y: f64| Sample {
-            secondary: true,
-            object: 3,
-            ..step(10.5 - 4e-4)(x, y)
-        };
-        let c = cmp(&glass, &glass_ref);
+        let (ours, reference) = (10.5 + 4e-4, 10.5 - 4e-4);
+        let c = cmp(&on_one_object(ours, true), &on_one_object(reference, true));
         assert_eq!(
             (c.excused.seen, c.excused.outline, c.excused.surface),
             (H, 0, 0)
         );
-        let shadow = |x: f64, y: f64| Sample {
-            object: 1,
-            ..step(10.5 + 4e-4)(x, y)
-        };
-        let shadow_ref = |x: f64, y: f64| Sample {
-            object: 1,
-            ..step(10.5 - 4e-4)(x, y)
-        };
-        let c = cmp(&shadow, &shadow_ref);
+        let c = cmp(
+            &on_one_object(ours, false),
+            &on_one_object(reference, false),
+        );
         assert_eq!(
             (c.excused.surface, c.excused.outline, c.excused.seen),
             (H, 0, 0)
