@@ -10,8 +10,9 @@ the sign of a rounding error). Run it from anywhere:
     python3 scripts/gen_catalog.py
 
 The catalog has camera scenes (cam_*), every primitive under seven transforms
-(prim_<shape>_<transform>), a hierarchy and an instancing scene (hier_*), and shading scenes
-(shade_*). Resolution is small (96x72) so that the whole catalog renders in seconds.
+(prim_<shape>_<transform>), a hierarchy and an instancing scene (hier_*), shading scenes
+(shade_*), and scenes with small features for the localized sensitivity tests (loc_*).
+Resolution is small (96x72) so that the whole catalog renders in seconds.
 """
 import math
 import os
@@ -52,6 +53,14 @@ phong_size = 30
 
 [materials.floor]
 color = [0.7, 0.72, 0.75]
+"""
+
+
+FLOOR = """
+[[objects]]
+type = "plane"
+material = "floor"
+transform = [{ translate = [0, -1, 0] }]
 """
 
 
@@ -222,12 +231,7 @@ transform = [{{ rotate = {{ axis = [0, 1, 0], degrees = {ang} }} }}, {{ translat
 
 
 def shading():
-    floor = """
-[[objects]]
-type = "plane"
-material = "floor"
-transform = [{ translate = [0, -1, 0] }]
-"""
+    floor = FLOOR
     def one(name, finish, comment, lights=LIGHT, objects=None, extra_render=""):
         mat = f"\n# {comment}\n[materials.test]\n{finish}\n"
         objs = objects or """
@@ -367,12 +371,7 @@ NESTED_PLACEMENTS = [
     "[{ rotate = { axis = [0, 1, 0], degrees = 25 } }, { translate = [-0.85, -0.2, 0] }]",
     "[{ scale = [-1, 1, 1] }, { rotate = { axis = [1, 0.2, 0], degrees = 12 } }, { translate = [0.9, -0.15, 0.3] }]",
 ]
-NESTED_BACKDROP = """
-[[objects]]
-type = "plane"
-material = "floor"
-transform = [{ translate = [0, -1, 0] }]
-
+NESTED_BACKDROP = FLOOR + """
 [[objects]]
 type = "box"
 material = "matte"
@@ -402,6 +401,73 @@ def nested_glass():
     write("shade_nested_glass_instance",
           "# Nested transparent objects (a drop inside a block), as one definition instanced twice.\n"
           + head + defs + insts)
+
+
+def localized():
+    """Small features, each of which a localized fault changes in a few pixels only
+    (tests/localized.rs)."""
+    pool = """
+# A low light with fade: it lights a pool on the floor and little else.
+[[lights]]
+position = [1.25, -0.6, -0.6]
+color = [0.9, 0.8, 0.5]
+fade_distance = 0.4
+fade_power = 2
+"""
+    mats = """
+# A small shiny sphere with its own finish.
+[materials.shiny]
+color = [0.3, 0.45, 0.9]
+phong = 0.8
+phong_size = 40
+
+# A glass sphere (ior 1.5) with its own interior.
+[materials.glass]
+color = [0.95, 0.97, 1.0]
+ambient = 0
+diffuse = 0.05
+filter = 0.9
+ior = 1.5
+"""
+    objs = FLOOR + """
+[[objects]]
+type = "sphere"
+material = "shiny"
+transform = [{ scale = 0.2 }, { translate = [-1.1, -0.8, -1.0] }]
+
+[[objects]]
+type = "sphere"
+material = "glass"
+transform = [{ scale = 0.22 }, { translate = [0.1, -0.7, -0.2] }]
+
+[[objects]]
+type = "box"
+material = "matte"
+transform = [{ scale = 0.4 }, { rotate = { axis = [0, 1, 0], degrees = 30 } }, { translate = [0.5, -0.6, 1.4] }]
+
+[[objects]]
+type = "cylinder"
+material = "floor"
+transform = [{ scale = [0.15, 0.8, 0.15] }, { translate = [-0.5, -0.2, 1.6] }]
+"""
+    write("loc_small_objects", LOOK + render() + LIGHT + pool + MATERIALS + mats + objs)
+    # A thin disk 0.005 above the floor. The light is 42 degrees high, so the floor's
+    # shadow rays meet the disk 0.0075 from their origin: POV-Ray's shadow tolerance of
+    # 1e-3 keeps that shadow, and a tolerance ten times larger would lose it. The camera
+    # looks closely at the rim on the shadow's side, where a sliver of the shadow shows.
+    near = """[camera.look_at]
+from = [0.6, 1.8, -5.5]
+at = [0.4, -1, -0.5]
+up = [0, 1, 0]
+fov = 4
+"""
+    disk = FLOOR + """
+[[objects]]
+type = "disk"
+material = "matte"
+transform = [{ scale = 0.6 }, { translate = [0, -0.995, 0] }]
+"""
+    write("loc_contact_shadow", near + render() + LIGHT + MATERIALS + disk)
 
 
 def mesh():
@@ -446,4 +512,5 @@ if __name__ == "__main__":
     primitives()
     hierarchy()
     shading()
+    localized()
     print(len([f for f in os.listdir(OUT) if f.endswith(".toml")]), "scenes in", os.path.relpath(OUT, ROOT))

@@ -5,8 +5,10 @@
 use conformance::catalog::load;
 use conformance::catalog::{repo_root, scenes, Entry};
 use conformance::manifest::Manifest;
-use conformance::povray::compare::{compare, Comparison};
-use conformance::povray::harness::{check_povray, read_reference, render_for_conformance};
+use conformance::povray::compare::Comparison;
+use conformance::povray::harness::{
+    check_povray, compare_render, read_reference, render_for_conformance,
+};
 use conformance::verdict::Verdict;
 use glam::DMat3;
 use renderer::aggregate::Aggregate;
@@ -29,13 +31,13 @@ fn entry(name: &str) -> Entry {
 /// Renders a (modified) scene and compares it with the named scene's reference.
 fn against_reference(scene: &Scene, name: &str) -> Comparison {
     let img = render_for_conformance(scene);
-    let (w, h, rgb) = read_reference(
+    let (_, _, rgb) = read_reference(
         &repo_root()
             .join("references/povray")
             .join(format!("{name}.exr")),
     )
     .unwrap();
-    compare(&img.rgb, &rgb, w, h)
+    compare_render(scene, &Default::default(), &img, &rgb)
 }
 
 #[test]

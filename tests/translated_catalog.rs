@@ -7,9 +7,10 @@
 //! like the unmoved one, to the last bits the comparison can see.
 
 use conformance::catalog::{repo_root, scenes, Entry};
-use conformance::povray::compare::{compare, Comparison};
-use conformance::povray::harness::{read_reference, render_for_conformance};
+use conformance::povray::compare::Comparison;
+use conformance::povray::harness::{compare_render, read_reference, render_for_conformance};
 use renderer::render::Image;
+use renderer::render::Options;
 use renderer::scene::Scene;
 use toml::Value;
 
@@ -102,12 +103,7 @@ fn every_catalog_scene_moved_far_away_passes_against_its_reference() {
         for e in &all {
             let (scene, img) = render_moved(e, by);
             let (_, near) = render_moved(e, 0.0);
-            let vs_near = compare(
-                &img.rgb,
-                &near.rgb,
-                near.width as usize,
-                near.height as usize,
-            );
+            let vs_near = compare_render(&scene, &Options::default(), &img, &near.rgb);
             worst = worst.max(vs_near.max_abs);
             moved_pixels += vs_near.failing + vs_near.silhouette;
             assert!(
@@ -116,13 +112,13 @@ fn every_catalog_scene_moved_far_away_passes_against_its_reference() {
                 e.name,
                 scene.origin()
             );
-            let (w, h, reference) = read_reference(
+            let (_, _, reference) = read_reference(
                 &repo_root()
                     .join("references/povray")
                     .join(format!("{}.exr", e.name)),
             )
             .unwrap();
-            let c = compare(&img.rgb, &reference, w, h);
+            let c = compare_render(&scene, &Options::default(), &img, &reference);
             if !c.passed() {
                 bad.push(format!("{} moved by {by:e}: {}", e.name, describe(&c)));
             }
@@ -151,10 +147,9 @@ fn f64_renders_the_scene_moved_by_1e7_like_the_unmoved_one() {
     let mut bad = Vec::new();
     let mut worst = 0.0f64;
     for e in &scenes("povray", "").unwrap() {
-        let (_, far) = render_moved(e, 1e7);
+        let (scene, far) = render_moved(e, 1e7);
         let (_, near) = render_moved(e, 0.0);
-        let (w, h) = (near.width as usize, near.height as usize);
-        let c = compare(&far.rgb, &near.rgb, w, h);
+        let c = compare_render(&scene, &Options::default(), &far, &near.rgb);
         worst = worst.max(c.max_abs);
         if c.failing + c.silhouette > 0 {
             bad.push(format!("{}: {}", e.name, describe(&c)));

@@ -189,6 +189,8 @@ pub fn radiance_test(a: &Estimate, b: &Estimate) -> RadianceTest {
 pub const GEOMETRY_REL_DISTANCE: f64 = 2e-5;
 /// Largest angle between normals, in degrees.
 pub const GEOMETRY_NORMAL_DEGREES: f64 = 0.01;
+/// Largest allowed fraction of edge pixels in the geometric comparison.
+pub const GEOMETRY_EDGE_BUDGET: f64 = 0.0025;
 
 /// Geometry channels of one image: distance from the eye, unit normal, hit mask.
 #[derive(Clone, Debug)]
@@ -215,7 +217,7 @@ pub struct GeometryTest {
     pub silhouette: usize,
     /// Other pixels outside tolerance.
     pub failing: usize,
-    /// Silhouette budget (0.25 % of the pixels, as for POV-Ray).
+    /// Edge-pixel budget ([`GEOMETRY_EDGE_BUDGET`] of the pixels).
     pub budget: usize,
 }
 
@@ -291,7 +293,7 @@ pub fn geometry_test(a: &Geometry, b: &Geometry) -> GeometryTest {
         max_normal_degrees: max_deg,
         silhouette,
         failing,
-        budget: ((w * h) as f64 * crate::povray::compare::SILHOUETTE_BUDGET).floor() as usize,
+        budget: ((w * h) as f64 * GEOMETRY_EDGE_BUDGET).floor() as usize,
     }
 }
 
