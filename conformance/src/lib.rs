@@ -4,8 +4,10 @@
 //! `mitsuba/`), so a third reference is one more folder.
 
 pub mod catalog;
+pub mod gate;
 pub mod manifest;
 pub mod mitsuba;
 pub mod povray;
 pub mod report;
 pub mod verdict;
+pub mod waivers;

@@ -10,7 +10,7 @@ use renderer::render::Image;
 use std::fmt::Write;
 use std::path::Path;
 
-fn save_png(path: &Path, w: u32, h: u32, rgb8: Vec<u8>) -> Result<()> {
+pub fn save_png(path: &Path, w: u32, h: u32, rgb8: Vec<u8>) -> Result<()> {
     let img = image::RgbImage::from_raw(w, h, rgb8)
         .ok_or_else(|| anyhow::anyhow!("image size mismatch"))?;
     img.save(path)?;
@@ -125,7 +125,7 @@ pub fn mitsuba_table(outcomes: &[MiOutcome]) -> String {
 
 /// A false-colour image of per-pixel z: black to white up to z = 2, orange up to the
 /// Šidák threshold, red beyond it.
-fn z_image(z: &[f64], alpha: f64) -> Vec<u8> {
+pub fn z_image(z: &[f64], alpha: f64) -> Vec<u8> {
     let mut out = Vec::with_capacity(z.len() * 3);
     for &v in z {
         if crate::mitsuba::stats::p_value(v) <= alpha {

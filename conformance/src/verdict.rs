@@ -11,6 +11,9 @@ pub enum Verdict {
     Stale,
     /// No reference.
     Missing,
+    /// Fails only in checks that `conformance/waivers.toml` waives: a deliberate
+    /// divergence, never a pass.
+    Waived,
 }
 
 impl std::fmt::Display for Verdict {
@@ -20,6 +23,7 @@ impl std::fmt::Display for Verdict {
             Verdict::Fail => "FAIL",
             Verdict::Stale => "STALE",
             Verdict::Missing => "MISSING",
+            Verdict::Waived => "WAIVED",
         })
     }
 }
