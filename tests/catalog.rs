@@ -57,18 +57,28 @@ fn main() {
         }
     }
     let w = waivers.clone();
-    trials.push(Trial::test("catalog::waivers_name_catalog_scenes", move || {
-        let unknown: Vec<String> = w
-            .list
-            .iter()
-            .filter(|x| !names.contains(&x.scene))
-            .map(|x| format!("{}:{}: no catalog scene {}", w.path.display(), x.line, x.scene))
-            .collect();
-        if unknown.is_empty() {
-            Ok(())
-        } else {
-            Err(unknown.join("\n").into())
-        }
-    }));
+    trials.push(Trial::test(
+        "catalog::waivers_name_catalog_scenes",
+        move || {
+            let unknown: Vec<String> = w
+                .list
+                .iter()
+                .filter(|x| !names.contains(&x.scene))
+                .map(|x| {
+                    format!(
+                        "{}:{}: no catalog scene {}",
+                        w.path.display(),
+                        x.line,
+                        x.scene
+                    )
+                })
+                .collect();
+            if unknown.is_empty() {
+                Ok(())
+            } else {
+                Err(unknown.join("\n").into())
+            }
+        },
+    ));
     libtest_mimic::run(&args, trials).exit();
 }

@@ -65,7 +65,12 @@ pub struct Judged {
 }
 
 /// Checks one scene of the `reference` catalog and applies the waivers.
-pub fn check(reference: &str, entry: &Entry, manifest: &Manifest, waivers: &Waivers) -> Result<Judged> {
+pub fn check(
+    reference: &str,
+    entry: &Entry,
+    manifest: &Manifest,
+    waivers: &Waivers,
+) -> Result<Judged> {
     let checked = match reference {
         "povray" => Checked::Povray(check_povray(entry, manifest)?),
         "mitsuba" => Checked::Mitsuba(check_mitsuba(entry, manifest, GATE_SPP, None)?),
@@ -310,7 +315,9 @@ impl Judged {
                 worst_pixels(w, &ours.rgb, reference, 8, &score, &class)
             }
             Checked::Mitsuba(o) => {
-                let Some(r) = &o.radiance else { return Vec::new() };
+                let Some(r) = &o.radiance else {
+                    return Vec::new();
+                };
                 let class = |k: usize| format!("z = {:.1}", r.z_max[k]);
                 worst_pixels(w, &ours.rgb, reference, 8, &|k| r.z_max[k], &class)
             }
@@ -348,10 +355,7 @@ impl Judged {
             .map(|(a, b)| (a - b).abs())
             .collect();
         let diff_png = match &self.checked {
-            Checked::Povray(o) => o
-                .cmp
-                .as_ref()
-                .map(|c| diff_image(c, &ours.rgb, reference)),
+            Checked::Povray(o) => o.cmp.as_ref().map(|c| diff_image(c, &ours.rgb, reference)),
             Checked::Mitsuba(_) => None,
         };
         save("difference", &abs, diff_png)?;
@@ -370,6 +374,11 @@ impl Judged {
     /// worst pixels, the failure images (written under [`failure_dir`]), and the commands
     /// that show or fix it.
     pub fn failure_message(&self) -> String {
+        self.failure_message_to(&failure_dir(self.checked.scene()))
+    }
+
+    /// [`Self::failure_message`] with the images written into `dir`.
+    pub fn failure_message_to(&self, dir: &Path) -> String {
         let (reference, scene) = (self.checked.reference(), self.checked.scene());
         let mut m = format!("{reference}/{scene}: {}\n", self.verdict);
         let scene_file = format!("conformance/scenes/{reference}/{scene}.toml");
@@ -427,25 +436,27 @@ If the change is deliberate, fix: {}   and commit the new reference; if not, und
                     rgb(d),
                     p.class,
                     match &self.checked {
-                        Checked::Povray(_) => format!(
-                            ", {:.1}× the tolerance",
-                            p.score.rem_euclid(1e12)
-                        ),
+                        Checked::Povray(_) =>
+                            format!(", {:.1}× the tolerance", p.score.rem_euclid(1e12)),
                         Checked::Mitsuba(_) => String::new(),
                     }
                 )
                 .unwrap();
             }
         }
-        let dir = failure_dir(scene);
-        match self.write_images(&dir) {
+        match self.write_images(dir) {
             Ok(paths) => {
                 writeln!(m, "  images: {}", dir.display()).unwrap();
                 for p in paths {
                     writeln!(m, "    {}", p.display()).unwrap();
                 }
             }
-            Err(e) => writeln!(m, "  could not write failure images to {}: {e:#}", dir.display()).unwrap(),
+            Err(e) => writeln!(
+                m,
+                "  could not write failure images to {}: {e:#}",
+                dir.display()
+            )
+            .unwrap(),
         }
         writeln!(m, "  show it in the report: {}", show_command(scene)).unwrap();
         writeln!(
@@ -515,10 +526,18 @@ mod tests {
 
     #[test]
     fn test01_close_names_suggest_typos_and_parts() {
-        let names: Vec<String> = ["prim_cone_shear", "prim_cone_rotate", "shade_phong", "mi_cornell"]
-            .map(String::from)
-            .to_vec();
-        assert_eq!(close_names("prim_cnoe", &names), ["prim_cone_rotate", "prim_cone_shear"]);
+        let names: Vec<String> = [
+            "prim_cone_shear",
+            "prim_cone_rotate",
+            "shade_phong",
+            "mi_cornell",
+        ]
+        .map(String::from)
+        .to_vec();
+        assert_eq!(
+            close_names("prim_cnoe", &names),
+            ["prim_cone_rotate", "prim_cone_shear"]
+        );
         assert_eq!(close_names("shade_phnog", &names), ["shade_phong"]);
         assert_eq!(close_names("cornel", &names), ["mi_cornell"]);
         assert!(close_names("typo", &names).is_empty());
@@ -526,7 +545,9 @@ mod tests {
 
     #[test]
     fn test02_worst_pixels_rank_by_score_then_position() {
-        let ours = [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 0.5, 0.5, 0.5, 1.0, 1.0, 1.0];
+        let ours = [
+            0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0, 0.5, 0.5, 0.5, 1.0, 1.0, 1.0,
+        ];
         let reference = [0.0f32; 12];
         let score = |k: usize| ours[3 * k] as f64;
         let p = worst_pixels(2, &ours, &reference, 3, &score, &|k| k.to_string());

@@ -4,9 +4,9 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use conformance::catalog::{repo_root, scenes};
+use conformance::gate::{self, REFERENCES};
 use conformance::manifest::Manifest;
-use conformance::povray::harness::check_povray;
-use conformance::verdict::Verdict;
+use conformance::waivers::Waivers;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -19,8 +19,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Cmd {
-    /// Render catalog scenes, compare them with their references, print a table and write
-    /// target/conformance/index.html. Exits 1 unless every scene passes.
+    /// Render catalog scenes, compare them with their references, print a table (and for
+    /// each scene that does not pass, its worst pixels and failure images) and write
+    /// $CARGO_TARGET_DIR/conformance/index.html (default target/). Exits 1 unless every
+    /// scene passes or is waived, 2 when the filter matches no scene.
     Run {
         /// Only scenes whose name contains this.
         #[arg(default_value = "")]
@@ -88,32 +90,38 @@ fn run() -> Result<ExitCode> {
         Cmd::Run { filter } => {
             let root = repo_root();
             let manifest = Manifest::load(&root.join("references/manifest.toml"))?;
-            let mut outcomes = Vec::new();
-            for e in scenes("povray", &filter)? {
-                outcomes.push(check_povray(&e, &manifest).with_context(|| e.name.clone())?);
+            let waivers = Waivers::committed()?;
+            let mut judged = Vec::new();
+            let mut all = Vec::new();
+            for reference in REFERENCES {
+                for e in scenes(reference, "")? {
+                    all.push(e.name.clone());
+                    if e.name.contains(&filter) {
+                        judged.push(
+                            gate::check(reference, &e, &manifest, &waivers)
+                                .with_context(|| format!("{reference}/{}", e.name))?,
+                        );
+                    }
+                }
             }
-            print!("{}", conformance::report::table(&outcomes));
-            let mut mi = Vec::new();
-            for e in scenes("mitsuba", &filter)? {
-                mi.push(
-                    conformance::mitsuba::harness::check_mitsuba(
-                        &e,
-                        &manifest,
-                        conformance::mitsuba::harness::GATE_SPP,
-                        None,
-                    )
-                    .with_context(|| e.name.clone())?,
-                );
+            if judged.is_empty() {
+                let close = gate::close_names(&filter, &all);
+                eprintln!("error: no catalog scene matches '{filter}'");
+                if close.is_empty() {
+                    eprintln!("the catalogs are conformance/scenes/povray/ and conformance/scenes/mitsuba/");
+                } else {
+                    eprintln!("close names: {}", close.join(", "));
+                }
+                return Ok(ExitCode::from(2));
             }
-            if !mi.is_empty() {
-                print!("{}", conformance::report::mitsuba_table(&mi));
+            print!("{}", conformance::report::table(&judged));
+            for j in judged.iter().filter(|j| !j.accepted()) {
+                print!("\n{}", j.failure_message());
             }
-            let dir = root.join("target/conformance");
-            conformance::report::write(&dir, &outcomes, &mi)?;
+            let dir = gate::report_dir();
+            conformance::report::write(&dir, &judged)?;
             println!("report: {}", dir.join("index.html").display());
-            let ok = outcomes.iter().all(|o| o.verdict == Verdict::Pass)
-                && mi.iter().all(|o| o.verdict == Verdict::Pass);
-            Ok(if ok {
+            Ok(if judged.iter().all(|j| j.accepted()) {
                 ExitCode::SUCCESS
             } else {
                 ExitCode::from(1)

@@ -1,126 +1,87 @@
-//! The report: for every scene, our image, the reference and a false-colour difference
-//! image, plus `index.html` showing them side by side with the metrics, and a text table.
+//! The report: a text table for the terminal, and `<target>/conformance/index.html` to work
+//! in. The page opens on a summary (counts per verdict and catalog), lists the scenes that
+//! need attention first (with a switch to show only them), gives each scene a stable
+//! anchor (`index.html#prim_cone_shear`), shows our image and the reference in one place
+//! (hover or click swaps them), a difference image whose colour encodes the size of the
+//! error (with a legend), and plots drawn at report time from the data on disk
+//! (`results.json`, written by the same run; instruction counts and the speed/accuracy
+//! trade when their scripts have left data in the target directory), each labelled with
+//! when and how it was measured.
 
-use crate::mitsuba::harness::MiOutcome;
+use crate::gate::{error_in_tolerances, Checked, Judged, REFERENCES};
 use crate::povray::compare::{diff_image, SILHOUETTE_BUDGET};
-use crate::povray::harness::Outcome;
-use anyhow::Result;
+use crate::verdict::Verdict;
+use anyhow::{Context, Result};
 use renderer::output::{to_rgb8, ToneMap};
-use renderer::render::Image;
 use std::fmt::Write;
 use std::path::Path;
 
+/// Writes 8-bit RGB pixels as a PNG.
 pub fn save_png(path: &Path, w: u32, h: u32, rgb8: Vec<u8>) -> Result<()> {
     let img = image::RgbImage::from_raw(w, h, rgb8)
         .ok_or_else(|| anyhow::anyhow!("image size mismatch"))?;
-    img.save(path)?;
+    img.save(path)
+        .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }
 
 fn srgb(w: u32, h: u32, rgb: &[f32]) -> Vec<u8> {
-    let img = Image {
-        width: w,
-        height: h,
-        rgb: rgb.to_vec(),
-        aov: None,
-        non_finite: 0,
-        moments: None,
-    };
-    to_rgb8(&img, ToneMap::Srgb)
+    to_rgb8(&crate::gate::image_of(w, h, rgb), ToneMap::Srgb)
+}
+
+/// The verdict shown for a judged scene ("pass", "FAIL", …; a stale waiver is named).
+pub fn shown_verdict(j: &Judged) -> String {
+    if j.stale_waivers.is_empty() {
+        j.verdict.to_string()
+    } else {
+        format!("{} (STALE WAIVER)", j.verdict)
+    }
 }
 
 /// The text table printed by `conformance run`.
-pub fn table(outcomes: &[Outcome]) -> String {
+pub fn table(judged: &[Judged]) -> String {
     let mut s = format!(
-        "{:<28} {:<8} {:>10} {:>10} {:>10} {:>6} {:>9} {:>8}  verdict\n",
-        "scene", "ref", "max abs", "mean abs", "rmse", "fail", "silh/bud", "ours s"
+        "{:<28} {:<8} {:>8}  {:<22} metrics\n",
+        "scene", "ref", "ours s", "verdict"
     );
-    for o in outcomes {
-        match &o.cmp {
-            Some(c) => writeln!(
-                s,
-                "{:<28} {:<8} {:>10.2e} {:>10.2e} {:>10.2e} {:>6} {:>9} {:>8.3}  {}",
-                o.scene,
-                o.reference,
-                c.max_abs,
-                c.mean_abs,
-                c.rmse,
-                c.failing,
-                format!("{}/{}", c.silhouette, c.budget()),
-                o.seconds,
-                o.verdict
-            ),
-            None => writeln!(
-                s,
-                "{:<28} {:<8} {:>57} {:>8.3}  {}",
-                o.scene, o.reference, "-", o.seconds, o.verdict
-            ),
-        }
+    for j in judged {
+        writeln!(
+            s,
+            "{:<28} {:<8} {:>8.3}  {:<22} {}",
+            j.checked.scene(),
+            j.checked.reference(),
+            j.checked.seconds(),
+            shown_verdict(j),
+            j.checked.metrics()
+        )
         .unwrap();
     }
-    let count = |v| outcomes.iter().filter(|o| o.verdict == v).count();
-    use crate::verdict::Verdict::*;
-    writeln!(
-        s,
-        "{} scenes: {} pass, {} fail, {} stale, {} missing",
-        outcomes.len(),
-        count(Pass),
-        count(Fail),
-        count(Stale),
-        count(Missing)
-    )
-    .unwrap();
+    s.push_str(&summary_line(judged));
     s
 }
 
-/// The text table of the Mitsuba comparisons.
-pub fn mitsuba_table(outcomes: &[MiOutcome]) -> String {
-    let mut s = format!(
-        "{:<24} {:>9} {:>8} {:>8} {:>9} {:>10} {:>9} {:>7}  verdict\n",
-        "scene (mitsuba)",
-        "rel dist",
-        "normal°",
-        "silh/bud",
-        "px pass",
-        "|global z|",
-        "rmse",
-        "ours s"
-    );
-    for o in outcomes {
-        match (&o.geometry, &o.radiance) {
-            (Some(g), Some(r)) => writeln!(
-                s,
-                "{:<24} {:>9.1e} {:>8.4} {:>8} {:>8.2}% {:>10.2} {:>9.2e} {:>7.2}  {}",
-                o.scene,
-                g.max_rel_distance,
-                g.max_normal_degrees,
-                format!("{}/{}", g.silhouette + g.failing, g.budget),
-                r.pass_fraction * 100.0,
-                r.global_z.iter().fold(0f64, |a, z| a.max(z.abs())),
-                r.rmse,
-                o.seconds,
-                o.verdict
-            ),
-            _ => writeln!(
-                s,
-                "{:<24} {:>66} {:>7.2}  {}",
-                o.scene, "-", o.seconds, o.verdict
-            ),
-        }
-        .unwrap();
-    }
-    let pass = outcomes
+const VERDICTS: [Verdict; 5] = [
+    Verdict::Pass,
+    Verdict::Fail,
+    Verdict::Stale,
+    Verdict::Missing,
+    Verdict::Waived,
+];
+
+fn summary_line(judged: &[Judged]) -> String {
+    let counts: Vec<String> = VERDICTS
         .iter()
-        .filter(|o| o.verdict == crate::verdict::Verdict::Pass)
-        .count();
-    writeln!(
-        s,
-        "{} Mitsuba scenes: {pass} pass, {} not",
-        outcomes.len(),
-        outcomes.len() - pass
+        .map(|v| {
+            let n = judged.iter().filter(|j| j.verdict == *v).count();
+            format!("{n} {v}")
+        })
+        .collect();
+    let stale_waivers: usize = judged.iter().map(|j| j.stale_waivers.len()).sum();
+    format!(
+        "{} scenes: {}, {stale_waivers} stale waiver(s)\n",
+        judged.len(),
+        counts.join(", ")
     )
-    .unwrap();
-    s
 }
 
 /// A false-colour image of per-pixel z: black to white up to z = 2, orange up to the
@@ -140,131 +101,452 @@ pub fn z_image(z: &[f64], alpha: f64) -> Vec<u8> {
     out
 }
 
-/// Starts a scene's row: writes our image into the scene's folder and returns the folder
-/// and the verdict line of the metrics.
-fn begin_row(
-    dir: &Path,
-    scene: &str,
-    ours: &Image,
-    verdict: crate::verdict::Verdict,
-    reference: &str,
-) -> Result<(std::path::PathBuf, String)> {
-    let sub = dir.join(scene);
-    std::fs::create_dir_all(&sub)?;
-    save_png(
-        &sub.join("ours.png"),
-        ours.width,
-        ours.height,
-        srgb(ours.width, ours.height, &ours.rgb),
-    )?;
-    let class = if verdict == crate::verdict::Verdict::Pass {
-        "pass"
-    } else {
-        "fail"
+/// Sort key: scenes that need attention first, then waived, then passing; by catalog and
+/// name.
+fn order(j: &Judged) -> (u8, u8, String) {
+    let rank = match (j.accepted(), j.verdict) {
+        (false, _) => 0,
+        (true, Verdict::Waived) => 1,
+        _ => 2,
     };
-    Ok((
-        sub,
-        format!("<span class=\"{class}\">{verdict}</span> against {reference}"),
-    ))
+    let catalog = REFERENCES
+        .iter()
+        .position(|r| *r == j.checked.reference())
+        .unwrap_or(REFERENCES.len()) as u8;
+    (rank, catalog, j.checked.scene().to_string())
 }
 
-/// One table row: the scene, our image, the reference, the third image (difference or z),
-/// and the metrics. Images that were not written show as a dash.
-fn row(html: &mut String, dir: &Path, scene: &str, third: &str, metrics: &str) {
-    let img = |f: &str| {
-        if dir.join(scene).join(f).exists() {
-            format!("<img src=\"{scene}/{f}\" alt=\"{f}\">")
-        } else {
-            "—".into()
-        }
-    };
+fn html_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// One scene's measurements, as `results.json` holds them.
+#[derive(serde::Serialize, serde::Deserialize, Clone, Debug)]
+pub struct Row {
+    /// The reference (povray, mitsuba).
+    pub reference: String,
+    /// The scene.
+    pub scene: String,
+    /// The verdict as shown.
+    pub verdict: String,
+    /// Seconds our render took.
+    pub seconds: f64,
+    /// Largest pixel error in units of the tolerance (POV-Ray), or largest per-pixel z
+    /// (Mitsuba).
+    pub worst: f64,
+}
+
+/// The data of one run, written beside the report and plotted from disk.
+#[derive(serde::Serialize, serde::Deserialize, Clone, Debug)]
+pub struct Results {
+    /// When the run ended (UTC, RFC 3339).
+    pub measured: String,
+    /// How: command, precision, threads.
+    pub how: String,
+    /// One row per scene.
+    pub rows: Vec<Row>,
+}
+
+/// A time as `YYYY-MM-DD HH:MM:SS UTC` (the proleptic Gregorian calendar from days since
+/// 1970-01-01).
+fn utc(t: std::time::SystemTime) -> String {
+    let secs = t
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs()) as i64;
+    let (days, rem) = (secs.div_euclid(86400), secs.rem_euclid(86400));
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + (m <= 2) as i64;
+    format!(
+        "{y:04}-{m:02}-{d:02} {:02}:{:02}:{:02} UTC",
+        rem / 3600,
+        rem / 60 % 60,
+        rem % 60
+    )
+}
+
+fn now_utc() -> String {
+    utc(std::time::SystemTime::now())
+}
+
+fn results(judged: &[Judged]) -> Results {
+    let rows = judged
+        .iter()
+        .map(|j| {
+            let worst = match &j.checked {
+                Checked::Povray(o) => o.reference_rgb.as_ref().map_or(0.0, |r| {
+                    (0..r.len() / 3)
+                        .map(|k| error_in_tolerances(&o.ours.rgb, r, k))
+                        .fold(0.0, f64::max)
+                }),
+                Checked::Mitsuba(o) => o
+                    .radiance
+                    .as_ref()
+                    .map_or(0.0, |r| r.z_max.iter().copied().fold(0.0, f64::max)),
+            };
+            Row {
+                reference: j.checked.reference().into(),
+                scene: j.checked.scene().into(),
+                verdict: shown_verdict(j),
+                seconds: j.checked.seconds(),
+                worst,
+            }
+        })
+        .collect();
+    Results {
+        measured: now_utc(),
+        how: format!(
+            "`conformance run`, {} build, {} threads, pixel centres (POV-Ray) / {} spp (Mitsuba)",
+            if cfg!(feature = "f64") { "f64" } else { "f32" },
+            std::thread::available_parallelism().map_or(1, |n| n.get()),
+            crate::mitsuba::harness::GATE_SPP
+        ),
+        rows,
+    }
+}
+
+/// A horizontal bar chart (SVG) of one value per scene, on a log axis.
+fn bar_chart(
+    title: &str,
+    label: &str,
+    rows: &[(String, f64)],
+    mark: Option<(f64, &str)>,
+) -> String {
+    let (lw, pw, bh) = (230.0, 420.0, 9.0);
+    let height = rows.len() as f64 * bh + 50.0;
+    let max = rows
+        .iter()
+        .map(|r| r.1)
+        .chain(mark.map(|m| m.0))
+        .fold(1e-9, f64::max);
+    let min = rows
+        .iter()
+        .map(|r| r.1)
+        .filter(|v| *v > 0.0)
+        .fold(max, f64::min)
+        .min(max / 10.0);
+    let (lo, hi) = (
+        min.log10().floor(),
+        max.log10().ceil().max(min.log10().floor() + 1.0),
+    );
+    let x = |v: f64| lw + pw * ((v.max(10f64.powf(lo)).log10() - lo) / (hi - lo));
+    let mut s = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{}\" height=\"{height}\" font-family=\"sans-serif\" font-size=\"8\" role=\"img\" aria-label=\"{title}\">\n<text x=\"0\" y=\"12\" font-size=\"12\">{title}</text>\n",
+        lw + pw + 20.0
+    );
+    for d in lo as i32..=hi as i32 {
+        let xv = x(10f64.powi(d));
+        writeln!(
+            s,
+            "<line x1=\"{xv}\" x2=\"{xv}\" y1=\"20\" y2=\"{}\" stroke=\"#ddd\"/><text x=\"{xv}\" y=\"{}\" text-anchor=\"middle\">1e{d}</text>",
+            height - 22.0,
+            height - 12.0
+        )
+        .unwrap();
+    }
+    for (i, (name, v)) in rows.iter().enumerate() {
+        let y = 22.0 + i as f64 * bh;
+        writeln!(
+            s,
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"end\">{}</text><rect x=\"{lw}\" y=\"{y}\" width=\"{:.1}\" height=\"{}\" fill=\"#4a7ab0\"><title>{} {v:.3e}</title></rect>",
+            lw - 4.0,
+            y + bh - 2.0,
+            html_escape(name),
+            (x(*v) - lw).max(0.5),
+            bh - 2.0,
+            html_escape(name)
+        )
+        .unwrap();
+    }
+    if let Some((m, what)) = mark {
+        let xm = x(m);
+        writeln!(
+            s,
+            "<line x1=\"{xm}\" x2=\"{xm}\" y1=\"20\" y2=\"{}\" stroke=\"#b00\"/><text x=\"{xm}\" y=\"{}\" fill=\"#b00\">{what}</text>",
+            height - 22.0,
+            height - 2.0
+        )
+        .unwrap();
+    }
     writeln!(
-        html,
-        "<tr><td>{scene}</td><td>{}</td><td>{}</td><td>{}</td><td>{metrics}</td></tr>",
-        img("ours.png"),
-        img("reference.png"),
-        img(third)
+        s,
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{label}</text></svg>",
+        lw + pw / 2.0,
+        height - 2.0
     )
     .unwrap();
+    s
 }
 
-/// Writes images and `index.html` under `dir`.
-pub fn write(dir: &Path, outcomes: &[Outcome], mitsuba: &[MiOutcome]) -> Result<()> {
-    std::fs::create_dir_all(dir)?;
-    let mut html = String::from(
-        "<!doctype html><html><head><meta charset=\"utf-8\"><title>Conformance report</title><style>\
-body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}td,th{padding:4px 8px;border-bottom:1px solid #ddd;text-align:left}\
-img{image-rendering:pixelated;width:192px;border:1px solid #888}.pass{color:#070}.fail{color:#b00;font-weight:bold}</style></head><body>\n",
+const STYLE: &str = "body{font-family:sans-serif;margin:2em;max-width:1400px}\
+table{border-collapse:collapse}td,th{padding:4px 8px;border-bottom:1px solid #ddd;text-align:left;vertical-align:top}\
+img{image-rendering:pixelated;width:192px;border:1px solid #888;display:block}\
+.pass{color:#070}.fail{color:#b00;font-weight:bold}.waived{color:#a60;font-weight:bold}\
+.swap{position:relative;cursor:pointer}.swap .ref{position:absolute;top:0;left:0;visibility:hidden}\
+.swap:hover .ref,.swap.flip .ref{visibility:visible}\
+body.only-attention tr.ok{display:none}\
+.legend{display:inline-block;width:300px;height:12px;vertical-align:middle;\
+background:linear-gradient(to right,rgb(255,255,0),rgb(255,90,0),rgb(200,0,200))}\
+.sw{display:inline-block;width:12px;height:12px;vertical-align:middle;border:1px solid #888}\
+#broken{color:#b00;font-weight:bold}";
+
+const SCRIPT: &str = "<script>\
+document.querySelectorAll('.swap').forEach(function(e){e.addEventListener('click',function(){e.classList.toggle('flip')})});\
+document.getElementById('attention').addEventListener('change',function(ev){document.body.classList.toggle('only-attention',ev.target.checked)});\
+window.addEventListener('load',function(){\
+var imgs=document.images,bad=[];\
+for(var i=0;i<imgs.length;i++){if(!imgs[i].complete||imgs[i].naturalWidth===0){bad.push(imgs[i].getAttribute('src'))}}\
+document.body.dataset.images=imgs.length;document.body.dataset.brokenImages=bad.length;\
+if(bad.length){document.getElementById('broken').textContent=bad.length+' image(s) failed to load: '+bad.join(', ')}});\
+</script>";
+
+/// Writes the images, `results.json`, and `index.html` under `dir`.
+pub fn write(dir: &Path, judged: &[Judged]) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let data = results(judged);
+    let json_path = dir.join("results.json");
+    std::fs::write(&json_path, serde_json::to_string_pretty(&data)?)
+        .with_context(|| format!("writing {}", json_path.display()))?;
+    let mut sorted: Vec<&Judged> = judged.iter().collect();
+    sorted.sort_by_key(|j| order(j));
+
+    let mut html = format!(
+        "<!doctype html><html><head><meta charset=\"utf-8\"><title>Conformance report</title><style>{STYLE}</style></head><body>\n<h1>Conformance report</h1>\n<p>Measured {} by {}.</p><p id=\"broken\"></p>\n",
+        data.measured, data.how
     );
-    writeln!(
-        html,
-        "<h1>Conformance report</h1><p>Tolerance per channel: 1.05·2<sup>−11</sup>·|ref| + 1e-6 (half-float rounding of the reference). \
-Silhouette pixels (orange in the difference image) are excused by geometry: our own image takes the reference's value within 1e-3 pixel of the centre, or across an edge within 1e-2 pixel; budget {:.2} % of pixels. \
-Failing pixels are red. See conformance/docs/tolerances.md.</p>",
-        SILHOUETTE_BUDGET * 100.0
-    )?;
-    html.push_str("<table><tr><th>scene</th><th>ours</th><th>reference</th><th>difference</th><th>metrics</th></tr>\n");
-    for o in outcomes {
-        let (sub, mut metrics) = begin_row(dir, &o.scene, &o.ours, o.verdict, &o.reference)?;
-        let (w, h) = (o.ours.width, o.ours.height);
-        if let (Some(r), Some(c)) = (&o.reference_rgb, &o.cmp) {
-            save_png(&sub.join("reference.png"), w, h, srgb(w, h, r))?;
-            save_png(&sub.join("diff.png"), w, h, diff_image(c, &o.ours.rgb, r))?;
-            write!(
-                metrics,
-                "<br>max abs {:.2e}<br>mean abs {:.2e}<br>RMSE {:.2e}<br>failing {}<br>silhouette {} (budget {})<br>{w}×{h}, ours {:.3} s",
-                c.max_abs,
-                c.mean_abs,
-                c.rmse,
-                c.failing,
-                c.silhouette,
-                c.budget(),
-                o.seconds
-            )?;
+    // Summary.
+    html.push_str("<h2 id=\"summary\">Summary</h2>\n<table><tr><th>catalog</th>");
+    for v in VERDICTS {
+        write!(html, "<th>{v}</th>")?;
+    }
+    html.push_str("<th>stale waivers</th><th>scenes</th></tr>\n");
+    for reference in REFERENCES {
+        let of: Vec<&Judged> = judged
+            .iter()
+            .filter(|j| j.checked.reference() == reference)
+            .collect();
+        write!(html, "<tr><td>{reference}</td>")?;
+        for v in VERDICTS {
+            let n = of.iter().filter(|j| j.verdict == v).count();
+            let class = match v {
+                Verdict::Pass => "pass",
+                Verdict::Waived if n > 0 => "waived",
+                Verdict::Waived => "",
+                _ if n > 0 => "fail",
+                _ => "",
+            };
+            write!(html, "<td class=\"{class}\">{n}</td>")?;
         }
-        row(&mut html, dir, &o.scene, "diff.png", &metrics);
+        let stale: usize = of.iter().map(|j| j.stale_waivers.len()).sum();
+        writeln!(html, "<td>{stale}</td><td>{}</td></tr>", of.len())?;
     }
     html.push_str("</table>\n");
-    if !mitsuba.is_empty() {
-        html.push_str(
-            "<h2>Against Mitsuba 3</h2><p>Radiance: per-pixel two-sample z-test in XYZ with Šidák correction (≥ 99.75 % of pixel-channels must pass) \
-and a global test of the mean difference (|z| < 4.5). The z image shows per-pixel z: grey up to 2, orange above, red past the Šidák threshold. \
-Geometry: pixel-centre distance and normal against Mitsuba's ray_intersect. See conformance/docs/mitsuba.md.</p>\n\
-<table><tr><th>scene</th><th>ours</th><th>Mitsuba</th><th>z</th><th>metrics</th></tr>\n",
-        );
-        for o in mitsuba {
-            let (sub, mut metrics) = begin_row(dir, &o.scene, &o.ours, o.verdict, "mitsuba")?;
-            let (w, h) = (o.ours.width, o.ours.height);
-            if let (Some(r), Some(g), Some(rgb)) = (&o.radiance, &o.geometry, &o.reference_rgb) {
-                save_png(&sub.join("reference.png"), w, h, srgb(w, h, rgb))?;
-                let alpha = crate::mitsuba::stats::sidak_alpha((w * h) as usize);
-                save_png(&sub.join("z.png"), w, h, z_image(&r.z_max, alpha))?;
-                write!(
-                    metrics,
-                    "<br>pixel-channels passing {:.2} %<br>global z {:.2} {:.2} {:.2}<br>RMSE {:.2e}<br>distance error ≤ {:.1e}<br>normal ≤ {:.4}°<br>edge pixels {} (budget {})<br>ours {:.2} s",
-                    r.pass_fraction * 100.0,
-                    r.global_z[0],
-                    r.global_z[1],
-                    r.global_z[2],
-                    r.rmse,
-                    g.max_rel_distance,
-                    g.max_normal_degrees,
-                    g.silhouette + g.failing,
-                    g.budget,
-                    o.seconds
-                )?;
-            }
-            row(&mut html, dir, &o.scene, "z.png", &metrics);
-        }
-        html.push_str("</table>\n");
+    let attention = judged.iter().filter(|j| !j.accepted()).count();
+    writeln!(
+        html,
+        "<p><label><input type=\"checkbox\" id=\"attention\"> show only the {attention} scene(s) that need attention (failing, stale, missing, or with a stale waiver)</label></p>"
+    )?;
+    // Legend.
+    writeln!(
+        html,
+        "<h2>How to read it</h2><p>Hover over (or click) our image to see the reference in its place. \
+POV-Ray scenes: the difference image shows agreeing pixels as dimmed grey, pixels excused by geometry \
+<span class=\"sw\" style=\"background:rgb(0,160,255)\"></span> blue, and failing pixels by the size of the error \
+relative to the per-pixel tolerance (1.05·2<sup>−11</sup>·|ref| + 1e-6): 1× <span class=\"legend\"></span> ≥ 1000× (log scale). \
+A pixel is excused only when our own renderer, traced again within 1e-3 pixel of the centre (or 1e-2 across a discontinuity), takes \
+the reference's value; at most {:.2} % of pixels may be excused. Mitsuba scenes: the z image shows per-pixel z of the two-sample \
+test, grey up to 2, <span class=\"sw\" style=\"background:rgb(255,160,0)\"></span> orange above, \
+<span class=\"sw\" style=\"background:rgb(230,0,0)\"></span> red past the Šidák threshold. \
+See conformance/docs/tolerances.md, mitsuba.md and workflows.md.</p>",
+        SILHOUETTE_BUDGET * 100.0
+    )?;
+    // Scenes.
+    html.push_str("<h2>Scenes</h2>\n<table><tr><th>scene</th><th>ours (hover: reference)</th><th>difference / z</th><th>verdict and metrics</th></tr>\n");
+    for j in &sorted {
+        scene_row(&mut html, dir, j)?;
     }
-    if let Ok(svg) =
-        std::fs::read_to_string(crate::catalog::repo_root().join("conformance/docs/tradeoff.svg"))
-    {
-        html.push_str("<h2>Speed against accuracy</h2>\n");
-        html.push_str(&svg);
-    }
+    html.push_str("</table>\n");
+    plots(&mut html, dir, &data)?;
+    html.push_str(SCRIPT);
     html.push_str("</body></html>\n");
-    std::fs::write(dir.join("index.html"), html)?;
+    let index = dir.join("index.html");
+    std::fs::write(&index, html).with_context(|| format!("writing {}", index.display()))?;
     Ok(())
+}
+
+fn scene_row(html: &mut String, dir: &Path, j: &Judged) -> Result<()> {
+    let (scene, reference) = (j.checked.scene(), j.checked.reference());
+    let sub = dir.join(scene);
+    std::fs::create_dir_all(&sub)?;
+    let ours = j.checked.ours();
+    let (w, h) = (ours.width, ours.height);
+    save_png(&sub.join("ours.png"), w, h, srgb(w, h, &ours.rgb))?;
+    let mut third = None;
+    if let Some(r) = j.checked.reference_rgb() {
+        save_png(&sub.join("reference.png"), w, h, srgb(w, h, r))?;
+        match &j.checked {
+            Checked::Povray(o) => {
+                if let Some(c) = &o.cmp {
+                    save_png(&sub.join("diff.png"), w, h, diff_image(c, &ours.rgb, r))?;
+                    third = Some("diff.png");
+                }
+            }
+            Checked::Mitsuba(o) => {
+                if let Some(rad) = &o.radiance {
+                    let alpha = crate::mitsuba::stats::sidak_alpha((w * h) as usize);
+                    save_png(&sub.join("z.png"), w, h, z_image(&rad.z_max, alpha))?;
+                    third = Some("z.png");
+                }
+            }
+        }
+    }
+    let class = match (j.accepted(), j.verdict) {
+        (false, _) => "fail",
+        (true, Verdict::Waived) => "waived",
+        _ => "pass",
+    };
+    let row_class = if j.accepted() { "ok" } else { "attention" };
+    let images = if j.checked.reference_rgb().is_some() {
+        format!(
+            "<div class=\"swap\" title=\"hover or click: the reference\"><img src=\"{scene}/ours.png\" alt=\"ours\"><img class=\"ref\" src=\"{scene}/reference.png\" alt=\"reference\"></div>"
+        )
+    } else {
+        format!("<img src=\"{scene}/ours.png\" alt=\"ours\">")
+    };
+    let third = third.map_or("—".to_string(), |f| {
+        format!("<img src=\"{scene}/{f}\" alt=\"{f}\">")
+    });
+    let mut notes = String::new();
+    for wv in &j.waived {
+        write!(notes, "<br>WAIVED: {}", html_escape(&wv.to_string()))?;
+    }
+    for wv in &j.stale_waivers {
+        write!(
+            notes,
+            "<br><span class=\"fail\">STALE WAIVER</span> (conformance/waivers.toml:{}): the {} check passes again; remove it",
+            wv.line, wv.check
+        )?;
+    }
+    let fix = match j.verdict {
+        Verdict::Missing | Verdict::Stale => format!(
+            "<br>fix: <code>{}</code>",
+            crate::gate::regen_command(reference, scene)
+        ),
+        _ => String::new(),
+    };
+    writeln!(
+        html,
+        "<tr id=\"{scene}\" class=\"{row_class}\"><td><a href=\"#{scene}\">{scene}</a><br>{reference}<br>{w}×{h}, ours {:.3} s</td><td>{images}</td><td>{third}</td><td><span class=\"{class}\">{}</span> against {reference}{fix}{notes}<br>{}</td></tr>",
+        j.checked.seconds(),
+        html_escape(&shown_verdict(j)),
+        html_escape(&j.checked.metrics()).replace("; ", "<br>")
+    )?;
+    Ok(())
+}
+
+/// Plots from data on disk: this run's `results.json`, and (when present) the
+/// instruction counts and the speed/accuracy trade their scripts leave in `dir`.
+fn plots(html: &mut String, dir: &Path, fallback: &Results) -> Result<()> {
+    html.push_str("<h2 id=\"plots\">Plots</h2>\n");
+    let data: Results = std::fs::read_to_string(dir.join("results.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or_else(|| fallback.clone());
+    let caption = format!(
+        "From results.json: measured {} by {}.",
+        data.measured, data.how
+    );
+    for reference in REFERENCES {
+        let rows: Vec<&Row> = data
+            .rows
+            .iter()
+            .filter(|r| r.reference == reference)
+            .collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let (title, label, mark) = if reference == "povray" {
+            (
+                "Largest pixel error per scene, in tolerances (POV-Ray)",
+                "largest |ours − reference| / tolerance (log)",
+                Some((1.0, "tolerance")),
+            )
+        } else {
+            (
+                "Largest per-pixel z per scene (Mitsuba)",
+                "largest z over pixels and channels (log)",
+                None,
+            )
+        };
+        let worst: Vec<(String, f64)> = rows.iter().map(|r| (r.scene.clone(), r.worst)).collect();
+        let time: Vec<(String, f64)> = rows.iter().map(|r| (r.scene.clone(), r.seconds)).collect();
+        writeln!(
+            html,
+            "<figure>{}<figcaption>{caption}</figcaption></figure>",
+            bar_chart(title, label, &worst, mark)
+        )?;
+        writeln!(
+            html,
+            "<figure>{}<figcaption>{caption} Wall-clock time moves by up to 2× with the machine's other tenants.</figcaption></figure>",
+            bar_chart(
+                &format!("Our render time per scene ({reference})"),
+                "seconds (log)",
+                &time,
+                None
+            )
+        )?;
+    }
+    for (file, what) in [
+        (
+            "bench.md",
+            "Instruction counts against the committed baseline (scripts/bench-counts.sh)",
+        ),
+        (
+            "tradeoff.svg",
+            "Speed against accuracy (scripts/tradeoff.sh)",
+        ),
+    ] {
+        let path = dir.join(file);
+        if let Ok(text) = std::fs::read_to_string(&path) {
+            let when = std::fs::metadata(&path)
+                .and_then(|m| m.modified())
+                .ok()
+                .map(|t| format!("written {}", utc(t)))
+                .unwrap_or_default();
+            let body = if file.ends_with(".svg") {
+                text
+            } else {
+                format!("<pre>{}</pre>", html_escape(&text))
+            };
+            writeln!(
+                html,
+                "<figure><h3>{what}</h3>{body}<figcaption>From {} ({when}).</figcaption></figure>",
+                path.display()
+            )?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::{Duration, UNIX_EPOCH};
+
+    #[test]
+    fn test01_utc_dates() {
+        let at = |s: u64| utc(UNIX_EPOCH + Duration::from_secs(s));
+        assert_eq!(at(0), "1970-01-01 00:00:00 UTC");
+        assert_eq!(at(951_782_400), "2000-02-29 00:00:00 UTC");
+        assert_eq!(at(1_795_510_861), "2026-11-24 09:01:01 UTC");
+    }
 }

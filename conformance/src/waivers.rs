@@ -77,10 +77,7 @@ impl Waivers {
     /// Parses the text of a waivers file.
     pub fn parse(text: &str, path: &Path) -> Result<Waivers> {
         let file: File = toml::from_str(text).map_err(|e| {
-            let (line, col) = e
-                .span()
-                .map(|s| line_col(text, s.start))
-                .unwrap_or((0, 0));
+            let (line, col) = e.span().map(|s| line_col(text, s.start)).unwrap_or((0, 0));
             anyhow::anyhow!("{}:{line}:{col}: {}", path.display(), e.message())
         })?;
         // Entries in file order: the n-th `[[waiver]]` header gives the n-th line.
@@ -95,7 +92,10 @@ impl Waivers {
             w.line = headers.get(k).copied().unwrap_or(0);
             let at = format!("{}:{}", path.display(), w.line);
             let Some((reference, name)) = w.scene.split_once('/') else {
-                bail!("{at}: waiver.scene `{}` is not <reference>/<scene>", w.scene);
+                bail!(
+                    "{at}: waiver.scene `{}` is not <reference>/<scene>",
+                    w.scene
+                );
             };
             let Some((_, checks)) = CHECKS.iter().find(|(r, _)| *r == reference) else {
                 bail!("{at}: waiver.scene: unknown reference `{reference}` (povray or mitsuba)");
@@ -123,7 +123,9 @@ impl Waivers {
     /// The waiver of `reference/scene`'s `check`, if any.
     pub fn find(&self, reference: &str, scene: &str, check: &str) -> Option<&Waiver> {
         let key = format!("{reference}/{scene}");
-        self.list.iter().find(|w| w.scene == key && w.check == check)
+        self.list
+            .iter()
+            .find(|w| w.scene == key && w.check == check)
     }
 
     /// The committed waivers (`conformance/waivers.toml`).
@@ -190,7 +192,10 @@ mod tests {
             (entry("pbrt/a", "pixels", "2026-01-01"), "unknown reference"),
             (entry("povray/a", "radiance", "2026-01-01"), "waiver.check"),
             (entry("povray/a", "pixels", "yesterday"), "waiver.date"),
-            (entry("povray/a", "pixels", "2026-01-01") + "extra = 1\n", "extra"),
+            (
+                entry("povray/a", "pixels", "2026-01-01") + "extra = 1\n",
+                "extra",
+            ),
         ] {
             let e = parse(&text).unwrap_err().to_string();
             assert!(e.contains(want), "{e:?} should mention {want:?}");

@@ -315,8 +315,9 @@ impl Centre {
 }
 
 /// A false-colour difference image (8-bit RGB): the reference's luminance dimmed to grey
-/// where the pixel agrees, orange for silhouette pixels, and red, brighter with the error,
-/// for failing pixels.
+/// where the pixel agrees, blue for pixels excused by geometry, and for failing pixels a
+/// colour that encodes the error relative to the tolerance on a log scale: yellow at 1×,
+/// orange-red at 30×, magenta at 1000× and beyond (the report's legend).
 pub fn diff_image(cmp: &Comparison, ours: &[f32], reference: &[f32]) -> Vec<u8> {
     let mut out = Vec::with_capacity(cmp.class.len() * 3);
     for (k, &c) in cmp.class.iter().enumerate() {
@@ -329,17 +330,37 @@ pub fn diff_image(cmp: &Comparison, ours: &[f32], reference: &[f32]) -> Vec<u8> 
                 let g = (lum * 90.0) as u8;
                 out.extend_from_slice(&[g, g, g]);
             }
-            1 => out.extend_from_slice(&[255, 160, 0]),
+            1 => out.extend_from_slice(&[0, 160, 255]),
             _ => {
                 let err = (0..3)
-                    .map(|i| (ours[3 * k + i] - reference[3 * k + i]).abs())
-                    .fold(0.0f32, f32::max);
-                let v = (128.0 + 127.0 * (err * 20.0).min(1.0)) as u8;
-                out.extend_from_slice(&[v, 0, 0]);
+                    .map(|i| {
+                        let r = reference[3 * k + i] as f64;
+                        (ours[3 * k + i] as f64 - r).abs() / tol(r)
+                    })
+                    .fold(1.0, f64::max);
+                out.extend_from_slice(&error_colour(err));
             }
         }
     }
     out
+}
+
+/// The colour of an error of `e` tolerances (e ≥ 1): yellow (255, 255, 0) at 1, through
+/// (255, 90, 0) at 10^1.5, to magenta (200, 0, 200) at 1000 and beyond.
+pub fn error_colour(e: f64) -> [u8; 3] {
+    let t = (e.max(1.0).log10() / 3.0).min(1.0);
+    let lerp = |a: f64, b: f64, u: f64| (a + (b - a) * u).round() as u8;
+    if t < 0.5 {
+        let u = t / 0.5;
+        [255, lerp(255.0, 90.0, u), 0]
+    } else {
+        let u = (t - 0.5) / 0.5;
+        [
+            lerp(255.0, 200.0, u),
+            lerp(90.0, 0.0, u),
+            lerp(0.0, 200.0, u),
+        ]
+    }
 }
 
 #[cfg(test)]
@@ -561,13 +582,33 @@ mod tests {
         let reference = at_centres(&step(10.5 - 2e-2));
         let img = diff_image(&c, &ours, &reference);
         assert_eq!(img.len(), W * H * 3);
-        assert_eq!(img[3 * 10], 255, "failing pixel, error 0.3: bright red");
-        assert_eq!(&img[3 * 10 + 1..3 * 10 + 3], &[0, 0]);
+        // Error 0.3 on a reference of 0.6 is about 975 tolerances: nearly magenta.
+        let e = (0..3)
+            .map(|i| {
+                (ours[30 + i] as f64 - reference[30 + i] as f64).abs()
+                    / tol(reference[30 + i] as f64)
+            })
+            .fold(0.0, f64::max);
+        assert!((900.0..1000.0).contains(&e), "error {e}");
+        assert_eq!(&img[3 * 10..3 * 10 + 3], &error_colour(e), "failing pixel");
         let lum = 0.2126 * 0.3 + 0.7152 * 0.24 + 0.0722 * 0.15;
         let g = (lum * 90.0) as u8;
         assert_eq!(&img[0..3], &[g, g, g], "agreeing pixel: dimmed grey");
         let mut c = c;
         c.class[0] = 1;
-        assert_eq!(&diff_image(&c, &ours, &reference)[0..3], &[255, 160, 0]);
+        assert_eq!(&diff_image(&c, &ours, &reference)[0..3], &[0, 160, 255]);
+    }
+
+    #[test]
+    fn the_error_colour_runs_from_yellow_to_magenta_on_a_log_scale() {
+        assert_eq!(error_colour(1.0), [255, 255, 0]);
+        assert_eq!(error_colour(10f64.powf(1.5)), [255, 90, 0]);
+        assert_eq!(error_colour(1000.0), [200, 0, 200]);
+        assert_eq!(error_colour(1e9), [200, 0, 200]);
+        let g = |e: f64| error_colour(e)[1];
+        assert!(
+            g(2.0) > g(5.0) && g(5.0) > g(20.0),
+            "green falls as the error grows"
+        );
     }
 }
