@@ -5,8 +5,14 @@ use anyhow::{Context, Result};
 use renderer::scene::Scene;
 use std::path::{Path, PathBuf};
 
-/// The repository root (the workspace holding this crate).
+/// The repository root (the workspace holding this crate), or `$CONFORMANCE_ROOT` when
+/// set: a folder with the same layout (`conformance/scenes/`, `conformance/waivers.toml`,
+/// `references/`), so a script can run the workflows on a scratch copy of the catalog
+/// without touching the checkout (scripts/check-workflows.sh).
 pub fn repo_root() -> PathBuf {
+    if let Some(r) = std::env::var_os("CONFORMANCE_ROOT").filter(|r| !r.is_empty()) {
+        return PathBuf::from(r);
+    }
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
         .expect("conformance/ has a parent")
@@ -42,6 +48,35 @@ pub fn scenes(reference: &str, filter: &str) -> std::io::Result<Vec<Entry>> {
     }
     v.sort_by(|a, b| a.name.cmp(&b.name));
     Ok(v)
+}
+
+/// The scenes of `reference` that a command line's FILTER selects: the scene of exactly
+/// that name if there is one, else every scene whose name contains it. An empty selection
+/// is an error that lists close names.
+pub fn select(reference: &str, filter: &str) -> Result<Vec<Entry>> {
+    let all = scenes(reference, "")
+        .with_context(|| format!("reading conformance/scenes/{reference}/"))?;
+    if let Some(e) = all.iter().find(|e| e.name == filter) {
+        return Ok(vec![e.clone()]);
+    }
+    let chosen: Vec<Entry> = all
+        .iter()
+        .filter(|e| e.name.contains(filter))
+        .cloned()
+        .collect();
+    if chosen.is_empty() {
+        let names: Vec<String> = all.into_iter().map(|e| e.name).collect();
+        let close = crate::gate::close_names(filter, &names);
+        anyhow::bail!(
+            "no {reference} catalog scene matches '{filter}'{}",
+            if close.is_empty() {
+                format!(" (the catalog is conformance/scenes/{reference}/)")
+            } else {
+                format!("; close names: {}", close.join(", "))
+            }
+        );
+    }
+    Ok(chosen)
 }
 
 /// Loads a catalog scene and returns it with its text.

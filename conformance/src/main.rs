@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use conformance::catalog::{repo_root, scenes};
+use conformance::catalog::{repo_root, scenes, select};
 use conformance::gate::{self, REFERENCES};
 use conformance::manifest::Manifest;
 use conformance::waivers::Waivers;
@@ -49,6 +49,27 @@ enum Cmd {
         /// Wrap the integrator in Mitsuba's `moment` integrator.
         #[arg(long)]
         moment: bool,
+    },
+    /// Add a scene to a catalog and generate its references: writes
+    /// conformance/scenes/CATALOG/NAME.toml (a copy of --from, or a small starting scene),
+    /// then renders its references with the reference tool and records them in
+    /// references/manifest.toml.
+    NewScene {
+        /// The scene's name: lower-case letters, digits and underscores.
+        name: String,
+        /// The catalog (povray or mitsuba).
+        #[arg(long)]
+        catalog: String,
+        /// Start from this scene file instead of the built-in starting scene.
+        #[arg(long)]
+        from: Option<PathBuf>,
+        /// Only write the scene file; generate its references later with
+        /// scripts/regen-CATALOG.sh NAME.
+        #[arg(long)]
+        no_references: bool,
+        /// Samples per pixel of a Mitsuba radiance reference.
+        #[arg(long, default_value_t = 8192)]
+        spp: u32,
     },
     /// Regenerate Mitsuba references (needs `pip install mitsuba`; see scripts/regen-mitsuba.sh).
     RegenMitsuba {
@@ -150,9 +171,40 @@ fn run() -> Result<ExitCode> {
                 .with_context(|| format!("writing {}", output.display()))?;
             Ok(ExitCode::SUCCESS)
         }
+        Cmd::NewScene {
+            name,
+            catalog,
+            from,
+            no_references,
+            spp,
+        } => {
+            let path = new_scene(&name, &catalog, from.as_deref())?;
+            println!("wrote {}", path.display());
+            let entries = select(&catalog, &name)?;
+            if no_references {
+                println!(
+                    "generate its references with: {}",
+                    gate::regen_command(&catalog, &name)
+                );
+                return Ok(ExitCode::SUCCESS);
+            }
+            let made = match catalog.as_str() {
+                "povray" => conformance::povray::refgen::regenerate(&entries),
+                _ => conformance::mitsuba::refgen::regenerate(&entries, spp),
+            };
+            made.with_context(|| {
+                format!(
+                    "the scene file was written, but its references were not: run {} (it installs the tool)",
+                    gate::regen_command(&catalog, &name)
+                )
+            })?;
+            println!(
+                "references written and recorded in references/manifest.toml; check with: cargo test --test catalog {catalog}::{name}"
+            );
+            Ok(ExitCode::SUCCESS)
+        }
         Cmd::RegenMitsuba { filter, spp, check } => {
-            let entries = scenes("mitsuba", &filter)?;
-            anyhow::ensure!(!entries.is_empty(), "no catalog scene matches '{filter}'");
+            let entries = select("mitsuba", &filter)?;
             if check {
                 let bad = conformance::mitsuba::refgen::check(&entries)?;
                 if bad.is_empty() {
@@ -168,8 +220,7 @@ fn run() -> Result<ExitCode> {
             }
         }
         Cmd::RegenPovray { filter, check } => {
-            let entries = scenes("povray", &filter)?;
-            anyhow::ensure!(!entries.is_empty(), "no catalog scene matches '{filter}'");
+            let entries = select("povray", &filter)?;
             if check {
                 let bad = conformance::povray::refgen::check(&entries)?;
                 if bad.is_empty() {
@@ -185,4 +236,48 @@ fn run() -> Result<ExitCode> {
             }
         }
     }
+}
+
+/// The built-in starting scenes of `new-scene`, per catalog.
+const STARTERS: [(&str, &str); 2] = [
+    ("povray", "prim_sphere_identity"),
+    ("mitsuba", "mi_diffuse_point"),
+];
+
+/// Writes a new catalog scene file and returns its path.
+fn new_scene(name: &str, catalog: &str, from: Option<&std::path::Path>) -> Result<PathBuf> {
+    let Some((_, starter)) = STARTERS.iter().find(|(c, _)| *c == catalog) else {
+        anyhow::bail!("--catalog {catalog}: unknown catalog (one of: povray, mitsuba)");
+    };
+    anyhow::ensure!(
+        !name.is_empty()
+            && name
+                .chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_'),
+        "NAME `{name}`: use lower-case letters, digits and underscores (it names the file and the test)"
+    );
+    let dir = repo_root().join("conformance/scenes").join(catalog);
+    let path = dir.join(format!("{name}.toml"));
+    anyhow::ensure!(
+        !path.exists(),
+        "{} already exists: to regenerate its references run {}",
+        path.display(),
+        gate::regen_command(catalog, name)
+    );
+    let source = from
+        .map(PathBuf::from)
+        .unwrap_or_else(|| dir.join(format!("{starter}.toml")));
+    let body = std::fs::read_to_string(&source)
+        .with_context(|| format!("reading {}", source.display()))?;
+    // The scene must load before it becomes part of the catalog.
+    renderer::scene::Scene::from_str(&body, &path, &dir)
+        .with_context(|| format!("{} does not load as a scene", source.display()))?;
+    let text = format!(
+        "# {name}: added with `conformance new-scene` from {}.\n{body}",
+        source
+            .file_name()
+            .map_or("?".into(), |f| f.to_string_lossy().into_owned())
+    );
+    std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+    Ok(path)
 }
