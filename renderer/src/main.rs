@@ -4,6 +4,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use renderer::output::{self, ToneMap};
 use renderer::render::{self, Options};
+use renderer::scene::build::Overrides;
 use renderer::scene::Scene;
 use renderer::spawn::Spawn;
 use std::path::PathBuf;
@@ -37,6 +38,15 @@ enum Cmd {
         /// Self-intersection strategy for secondary rays: robust, or fixed=EPS (POV-Ray's 1e-3), or none.
         #[arg(long, default_value = "robust", value_parser = parse_spawn)]
         spawn: Spawn,
+        /// Samples per pixel, replacing the scene's render.samples (validated like it).
+        #[arg(long, value_name = "N")]
+        spp: Option<u32>,
+        /// Image size, replacing the scene's render.width and render.height (validated like
+        /// them). The camera's window stays as the scene gives it, so the pixels cover the
+        /// same view; with a look-at camera the field of view follows the new aspect ratio
+        /// as it would in the scene file.
+        #[arg(long, value_name = "WxH", value_parser = parse_size)]
+        size: Option<(u32, u32)>,
     },
 }
 
@@ -51,6 +61,21 @@ fn parse_spawn(s: &str) -> Result<Spawn, String> {
             .map(Spawn::Fixed)
             .ok_or_else(|| format!("'{s}': expected robust, none or fixed=EPS")),
     }
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT, e.g. 640x480"))?;
+    let side = |v: &str, name: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|e| format!("'{s}': the {name} '{v}' is not a whole number of pixels ({e})"))
+    };
+    let size = (side(w, "width")?, side(h, "height")?);
+    renderer::scene::build::check_size(size.0, size.1)
+        .map_err(|(which, m)| format!("'{s}': {which}: {m}"))?;
+    Ok(size)
 }
 
 fn main() -> ExitCode {
@@ -72,6 +97,8 @@ fn run() -> Result<()> {
             threads,
             map,
             spawn,
+            spp,
+            size,
         } => {
             let ext = out
                 .extension()
@@ -84,7 +111,9 @@ fn run() -> Result<()> {
                 out.display()
             );
             anyhow::ensure!(!aov || ext == "exr", "--aov needs an .exr output");
-            let s = Scene::load(&scene)?;
+            let overrides = Overrides { size, samples: spp };
+            overrides.check().map_err(anyhow::Error::msg)?;
+            let s = Scene::load_with(&scene, &overrides)?;
             let t0 = std::time::Instant::now();
             let img = render::render(
                 &s,

@@ -15,6 +15,7 @@ pub enum ToneMap {
     /// Clamp to [0, 1], linear.
     Clamp,
     /// Rescale the image's min..max to [0, 1], linear.
+    #[value(alias = "minmax")]
     MinMax,
 }
 

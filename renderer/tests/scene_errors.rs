@@ -151,6 +151,22 @@ fn test11_render_settings_are_validated() {
         "render.width",
         "at least 1",
     );
+    // Each side is named on its own line.
+    check(
+        &CAMERA.replace("height = 8", "height = 0"),
+        11,
+        "render.height",
+        "at least 1",
+    );
+    // An image too large to allocate is refused before any allocation, with the amount.
+    check(
+        &CAMERA
+            .replace("width = 8", "width = 1000000")
+            .replace("height = 8", "height = 1000000"),
+        10,
+        "render.width",
+        "more than the limit of 134217728 (2^27): the image with its AOVs could need 72000.0 GB",
+    );
     let text = format!("{CAMERA}samples = 0\n");
     check(&text, 12, "render.samples", "at least 1");
     let text = format!("{CAMERA}\n[materials.m]\nior = -1.5\n");

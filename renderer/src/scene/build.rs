@@ -29,10 +29,84 @@ fn color(v: V3) -> Color {
     Color::new(v[0] as f32, v[1] as f32, v[2] as f32)
 }
 
+/// The largest image, in pixels: 2²⁷ (for example 16384 × 8192). An image with AOVs and
+/// second moments holds 18 floats (72 bytes) per pixel, so the largest needs 9.7 GB.
+pub const MAX_PIXELS: u64 = 1 << 27;
+
+/// Bytes an image of `pixels` pixels may need: RGB, the geometry AOVs (Z, N, P, objectId)
+/// and the second moments, as 32-bit floats.
+pub fn image_bytes(pixels: u64) -> u64 {
+    pixels * 18 * 4
+}
+
+/// Checks an image size: each side at least 1, and at most [`MAX_PIXELS`] pixels. The
+/// error names `width` or `height` and says why.
+pub fn check_size(width: u32, height: u32) -> Result<(), (&'static str, String)> {
+    if width == 0 {
+        return Err(("width", "must be at least 1".into()));
+    }
+    if height == 0 {
+        return Err(("height", "must be at least 1".into()));
+    }
+    let px = width as u64 * height as u64;
+    if px > MAX_PIXELS {
+        let side = if width >= height { "width" } else { "height" };
+        return Err((
+            side,
+            format!(
+                "{width} × {height} = {px} pixels is more than the limit of {MAX_PIXELS} (2^27): \
+the image with its AOVs could need {:.1} GB",
+                image_bytes(px) as f64 / 1e9
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks a sample count.
+pub fn check_samples(samples: u32) -> Result<(), String> {
+    if samples == 0 {
+        return Err("must be at least 1".into());
+    }
+    Ok(())
+}
+
+/// Settings given on the command line that replace the scene file's, validated like them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Overrides {
+    /// Image width and height (`--size WxH`).
+    pub size: Option<(u32, u32)>,
+    /// Samples per pixel (`--spp N`).
+    pub samples: Option<u32>,
+}
+
+impl Overrides {
+    /// Validates the overrides on their own, naming the option in the message.
+    pub fn check(&self) -> Result<(), String> {
+        if let Some((w, h)) = self.size {
+            check_size(w, h).map_err(|(side, m)| format!("--size {w}x{h}: the {side} {m}"))?;
+        }
+        if let Some(n) = self.samples {
+            check_samples(n).map_err(|m| format!("--spp {n}: {m}"))?;
+        }
+        Ok(())
+    }
+}
+
 /// Parses and builds.
 pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> {
+    build_with(text, file, base, &Overrides::default())
+}
+
+/// Parses and builds, with command-line overrides of the render settings.
+pub fn build_with(
+    text: &str,
+    file: &Path,
+    base: &Path,
+    overrides: &Overrides,
+) -> Result<Scene, SceneError> {
     let src = Source::new(file, text);
-    let desc = format::parse(text).map_err(|(span, path, msg)| {
+    let mut desc = format::parse(text).map_err(|(span, path, msg)| {
         let field = if path.is_empty() || path == "." {
             "(syntax)".to_string()
         } else {
@@ -40,16 +114,32 @@ pub fn build(text: &str, file: &Path, base: &Path) -> Result<Scene, SceneError> 
         };
         src.error(span.map_or(0, |s| s.start), field, msg)
     })?;
-    let r = desc.render.get_ref();
+    let render_span = desc.render.span();
     let at_render = |field: &str, msg: &str| {
-        src.key_error(desc.render.span(), field, format!("render.{field}"), msg)
+        src.key_error(render_span.clone(), field, format!("render.{field}"), msg)
     };
-    if r.width == 0 || r.height == 0 {
-        return Err(at_render("width", "width and height must be at least 1"));
+    let r = desc.render.get_ref();
+    if let Err((side, m)) = check_size(r.width, r.height) {
+        return Err(at_render(side, &m));
     }
-    if r.samples == 0 {
-        return Err(at_render("samples", "samples must be at least 1"));
+    if let Err(m) = check_samples(r.samples) {
+        return Err(at_render("samples", &m));
     }
+    overrides.check().map_err(|m| SceneError {
+        file: src.file.clone(),
+        line: 0,
+        column: 0,
+        field: "(command line)".into(),
+        message: m,
+    })?;
+    let r = desc.render.get_mut();
+    if let Some((w, h)) = overrides.size {
+        (r.width, r.height) = (w, h);
+    }
+    if let Some(n) = overrides.samples {
+        r.samples = n;
+    }
+    let r = desc.render.get_ref();
     for (name, v) in [
         ("background", r.background),
         ("ambient_light", r.ambient_light),
@@ -718,6 +808,11 @@ impl Builder<'_> {
 impl Scene {
     /// Reads and builds a scene file.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        Scene::load_with(path, &Overrides::default())
+    }
+
+    /// Reads and builds a scene file with command-line overrides of its render settings.
+    pub fn load_with(path: &Path, overrides: &Overrides) -> Result<Scene, SceneError> {
         let text = std::fs::read_to_string(path).map_err(|e| SceneError {
             file: path.display().to_string(),
             line: 0,
@@ -726,7 +821,7 @@ impl Scene {
             message: format!("cannot read: {e}"),
         })?;
         let base = path.parent().unwrap_or(Path::new("."));
-        Scene::from_str(&text, path, base)
+        build_with(&text, path, base, overrides)
     }
 
     /// Builds a scene from text. `file` names it in errors; meshes resolve against `base`.

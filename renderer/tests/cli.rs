@@ -1,0 +1,116 @@
+//! The command line: `--spp` and `--size` replace the scene's settings and are validated
+//! like them; `--map` accepts the spelling the docs use; errors exit non-zero and leave no
+//! file behind.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/sphere.toml");
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("renderer-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_renderer"))
+        .args(args)
+        .output()
+        .expect("the renderer binary runs")
+}
+
+fn png_size(path: &Path) -> (u32, u32) {
+    let b = std::fs::read(path).unwrap();
+    let be = |i: usize| u32::from_be_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]]);
+    (be(16), be(20))
+}
+
+/// (args after `render SCENE -o OUT`, expected success, text the output must contain)
+fn check(name: &str, extra: &[&str], ok: bool, says: &str) -> PathBuf {
+    let dir = scratch(name);
+    let out = dir.join("out.png");
+    let mut args = vec!["render", SCENE, "-o", out.to_str().unwrap()];
+    args.extend_from_slice(extra);
+    let o = run(&args);
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(o.status.success(), ok, "renderer {args:?}: {text}");
+    assert!(
+        text.contains(says),
+        "renderer {args:?} should say {says:?}: {text}"
+    );
+    if !ok {
+        assert!(!out.exists(), "a failed render left {}", out.display());
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            0,
+            "leftovers in {}",
+            dir.display()
+        );
+    }
+    out
+}
+
+#[test]
+fn test01_size_and_spp_replace_the_scene_settings() {
+    let out = check(
+        "size",
+        &["--size", "20x10", "--spp", "3"],
+        true,
+        "20x10 px, 3 spp",
+    );
+    assert_eq!(png_size(&out), (20, 10));
+    let out = check("size-upper", &["--size", "7X5"], true, "7x5 px");
+    assert_eq!(png_size(&out), (7, 5));
+}
+
+#[test]
+fn test02_bad_overrides_are_refused_like_scene_fields() {
+    check(
+        "w0",
+        &["--size", "0x10"],
+        false,
+        "'0x10': width: must be at least 1",
+    );
+    check(
+        "h0",
+        &["--size", "10x0"],
+        false,
+        "'10x0': height: must be at least 1",
+    );
+    check(
+        "big",
+        &["--size", "1000000x1000000"],
+        false,
+        "more than the limit of 134217728",
+    );
+    check("shape", &["--size", "640"], false, "expected WIDTHxHEIGHT");
+    check(
+        "neg",
+        &["--size=-4x3"],
+        false,
+        "is not a whole number of pixels",
+    );
+    check(
+        "spp0",
+        &["--spp", "0"],
+        false,
+        "--spp 0: must be at least 1",
+    );
+}
+
+#[test]
+fn test03_map_accepts_minmax_and_min_max() {
+    for m in ["minmax", "min-max", "clamp", "srgb"] {
+        check(
+            &format!("map-{m}"),
+            &["--map", m, "--size", "4x3"],
+            true,
+            "4x3 px",
+        );
+    }
+}
