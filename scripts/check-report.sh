@@ -10,7 +10,7 @@
 # Installs Debian's chromium with apt-get when it is missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-case "${1:-}" in -h|--help) sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; exit 0;; esac
+case "${1:-}" in -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0;; esac
 self_test=""
 if [ "${1:-}" = "--self-test" ]; then self_test=1; shift; fi
 

@@ -7,7 +7,7 @@
 #                                  failure, waive a deliberate divergence and retire it
 set -euo pipefail
 cd "$(dirname "$0")/.."
-case "${1:-}" in -h|--help) sed -n '2,7p' "$0" | sed 's/^# \{0,1\}//'; exit 0;; esac
+case "${1:-}" in -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0;; esac
 repo="$(pwd)"
 before="$(git status --porcelain 2>/dev/null || true)"
 export CARGO_TARGET_DIR="${CARGO_TARGET_DIR:-$repo/target}"

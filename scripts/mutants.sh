@@ -14,7 +14,7 @@
 # compiled once. The run is nice'd: it is meant to run in the background.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-case "${1:-}" in -h|--help) sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; exit 0;; esac
+case "${1:-}" in -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0;; esac
 
 if ! command -v cargo-mutants >/dev/null 2>&1; then
     echo "cargo-mutants not found: installing it with cargo install" >&2

@@ -1,12 +1,24 @@
 #!/usr/bin/env bash
 # Measures the f32/f64 precision trade in one run: builds the measurement tool in both
-# precisions, runs it, and writes the tables into renderer/docs/precision.md (between the
-# "precision:begin" and "precision:end" markers). Needs only cargo and python3.
+# precisions and runs it. Needs only cargo and python3.
+#
+#   scripts/precision.sh                write the tables to ${CARGO_TARGET_DIR:-target}/conformance/precision.md
+#   scripts/precision.sh --write-docs   also write them into renderer/docs/precision.md (between
+#                                       the "precision:begin" and "precision:end" markers)
 set -euo pipefail
 cd "$(dirname "$0")/.."
+write_docs=""
+case "${1:-}" in
+    -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0;;
+    --write-docs) write_docs=1;;
+    "") ;;
+    *) echo "unknown option $1 (see --help)" >&2; exit 2;;
+esac
+out="${CARGO_TARGET_DIR:-target}/conformance"
+mkdir -p "$out"
 f32=$(cargo run --release -q -p conformance --bin precision)
 f64=$(cargo run --release -q -p conformance --features f64 --bin precision)
-python3 - "$f32" "$f64" <<'PY'
+python3 - "$f32" "$f64" "$out/precision.md" "$write_docs" <<'PY'
 import sys, datetime, platform, os
 rows = [l.split("|") for out in sys.argv[1:3] for l in out.strip().splitlines()]
 def get(kind): return [r[1:] for r in rows if r[0] == kind]
@@ -37,10 +49,15 @@ md.append("|---|---|---|---|---|---|---|")
 for p, name, _thr, h0, h1, h2, l1, l2 in spawn:
     md.append(f"| {p} | {name} | {h0} | {h1} | {h2} | {l1} | {l2} |")
 table = "\n".join(md) + "\n"
+open(sys.argv[3], "w").write(table)
+print(table)
+print("wrote " + sys.argv[3])
+if not sys.argv[4]:
+    sys.exit(0)
 path = "renderer/docs/precision.md"
 text = open(path).read()
 a, b = "<!-- precision:begin -->\n", "<!-- precision:end -->"
 i, j = text.index(a) + len(a), text.index(b)
 open(path, "w").write(text[:i] + table + text[j:])
-print(table)
+print("updated " + path)
 PY

@@ -11,7 +11,7 @@
 #                                                    check against the committed files
 set -euo pipefail
 cd "$(dirname "$0")/.."
-case "${1:-}" in -h|--help) sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'; exit 0;; esac
+case "${1:-}" in -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0;; esac
 
 if ! python3 -c "import mitsuba, numpy" >/dev/null 2>&1; then
     echo "Mitsuba not found: installing it with pip" >&2

@@ -9,7 +9,7 @@
 #                                              and check the result equals the committed files
 set -euo pipefail
 cd "$(dirname "$0")/.."
-case "${1:-}" in -h|--help) sed -n '2,9p' "$0" | sed 's/^# \{0,1\}//'; exit 0;; esac
+case "${1:-}" in -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0;; esac
 
 if ! command -v povray >/dev/null 2>&1; then
     echo "povray not found: installing it with apt-get" >&2

@@ -1,8 +1,9 @@
 //! The speed/accuracy trade: for three Mitsuba catalog scenes, the RMSE against the 8192-spp
 //! Mitsuba reference versus render time, for this renderer at 1, 4, 16, 64 and 256 spp with
-//! each sampler, and for Mitsuba at the same spp. Both use every core. Writes the table
-//! into conformance/docs/tradeoff.md (between markers) and the plot to
-//! conformance/docs/tradeoff.svg, which the HTML report embeds. Run by scripts/tradeoff.sh.
+//! each sampler, and for Mitsuba at the same spp. Both use every core. Writes the table and
+//! the plot to `<target>/conformance/tradeoff.md` and `tradeoff.svg` (the HTML report
+//! embeds the plot); with `--write-docs`, also into conformance/docs/tradeoff.md (between
+//! markers) and conformance/docs/tradeoff.svg. Run by scripts/tradeoff.sh.
 
 use anyhow::{Context, Result};
 use conformance::catalog::load;
@@ -145,6 +146,18 @@ fn main() -> Result<()> {
         }
         md.push('\n');
     }
+    let out = conformance::gate::report_dir();
+    std::fs::create_dir_all(&out)?;
+    std::fs::write(out.join("tradeoff.md"), &md)?;
+    std::fs::write(out.join("tradeoff.svg"), svg(&points))?;
+    println!("{md}");
+    println!(
+        "wrote {} and tradeoff.svg",
+        out.join("tradeoff.md").display()
+    );
+    if !std::env::args().any(|a| a == "--write-docs") {
+        return Ok(());
+    }
     let doc = root.join("conformance/docs/tradeoff.md");
     let text = std::fs::read_to_string(&doc)?;
     let (a, b) = ("<!-- tradeoff:begin -->\n", "<!-- tradeoff:end -->");
@@ -154,7 +167,7 @@ fn main() -> Result<()> {
     );
     std::fs::write(&doc, format!("{}{md}{}", &text[..i], &text[j..]))?;
     std::fs::write(root.join("conformance/docs/tradeoff.svg"), svg(&points))?;
-    println!("{md}");
+    println!("updated conformance/docs/tradeoff.md and tradeoff.svg");
     Ok(())
 }
 
