@@ -66,7 +66,7 @@ pub fn select(reference: &str, filter: &str) -> Result<Vec<Entry>> {
         .collect();
     if chosen.is_empty() {
         let names: Vec<String> = all.into_iter().map(|e| e.name).collect();
-        let close = crate::gate::close_names(filter, &names);
+        let close = close_names(filter, &names);
         anyhow::bail!(
             "no {reference} catalog scene matches '{filter}'{}",
             if close.is_empty() {
@@ -93,4 +93,64 @@ pub fn scratch_dir(name: &str) -> Result<PathBuf> {
     let d = std::env::temp_dir().join(format!("conformance-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&d)?;
     Ok(d)
+}
+
+/// Names of `candidates` close to `wanted` (sharing a word or within a small edit
+/// distance), best first: for "no scene matches" messages.
+pub fn close_names<'a>(wanted: &str, candidates: &'a [String]) -> Vec<&'a str> {
+    let mut scored: Vec<(usize, &str)> = candidates
+        .iter()
+        .filter_map(|c| {
+            let d = (0..=c.len().saturating_sub(wanted.len()))
+                .filter_map(|i| c.get(i..i + wanted.len().min(c.len())))
+                .map(|sub| edit_distance(wanted, sub))
+                .min()
+                .unwrap_or(usize::MAX)
+                .min(edit_distance(wanted, c));
+            let limit = (wanted.len() / 3).max(1);
+            (d <= limit).then_some((d, c.as_str()))
+        })
+        .collect();
+    scored.sort();
+    scored.into_iter().map(|(_, c)| c).take(8).collect()
+}
+
+/// Levenshtein distance.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut cur = vec![i + 1; b.len() + 1];
+        for (j, cb) in b.iter().enumerate() {
+            cur[j + 1] = (prev[j] + (ca != *cb) as usize)
+                .min(prev[j + 1] + 1)
+                .min(cur[j] + 1);
+        }
+        prev = cur;
+    }
+    prev[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn test01_close_names_suggest_typos_and_parts() {
+        let names: Vec<String> = [
+            "prim_cone_shear",
+            "prim_cone_rotate",
+            "shade_phong",
+            "mi_cornell",
+        ]
+        .map(String::from)
+        .to_vec();
+        assert_eq!(
+            close_names("prim_cnoe", &names),
+            ["prim_cone_rotate", "prim_cone_shear"]
+        );
+        assert_eq!(close_names("shade_phnog", &names), ["shade_phong"]);
+        assert_eq!(close_names("cornel", &names), ["mi_cornell"]);
+        assert!(close_names("typo", &names).is_empty());
+    }
 }

@@ -332,14 +332,14 @@ impl Judged {
         let (w, h) = (ours.width, ours.height);
         let mut written = Vec::new();
         let mut save = |name: &str, linear: &[f32], png: Option<Vec<u8>>| -> Result<()> {
-            let img = image_of(w, h, linear);
+            let img = crate::images::image_of(w, h, linear);
             let exr = dir.join(format!("{name}.exr"));
             renderer::output::write_exr(&img, &exr)?;
             let png_path = dir.join(format!("{name}.png"));
             let bytes = png.unwrap_or_else(|| {
                 renderer::output::to_rgb8(&img, renderer::output::ToneMap::Srgb)
             });
-            crate::report::save_png(&png_path, w, h, bytes)?;
+            crate::images::save_png(&png_path, w, h, bytes)?;
             written.extend([exr, png_path]);
             Ok(())
         };
@@ -365,7 +365,7 @@ impl Judged {
         {
             let z: Vec<f32> = r.z_max.iter().flat_map(|&v| [v as f32; 3]).collect();
             let alpha = crate::mitsuba::stats::sidak_alpha((w * h) as usize);
-            save("z", &z, Some(crate::report::z_image(&r.z_max, alpha)))?;
+            save("z", &z, Some(crate::images::z_image(&r.z_max, alpha)))?;
         }
         Ok(written)
     }
@@ -472,76 +472,9 @@ If the change is deliberate, fix: {}   and commit the new reference; if not, und
     }
 }
 
-/// An image holding `rgb` (no AOVs).
-pub fn image_of(w: u32, h: u32, rgb: &[f32]) -> Image {
-    Image {
-        width: w,
-        height: h,
-        rgb: rgb.to_vec(),
-        aov: None,
-        non_finite: 0,
-        moments: None,
-    }
-}
-
-/// Names of `candidates` close to `wanted` (sharing a word or within a small edit
-/// distance), best first: for "no scene matches" messages.
-pub fn close_names<'a>(wanted: &str, candidates: &'a [String]) -> Vec<&'a str> {
-    let mut scored: Vec<(usize, &str)> = candidates
-        .iter()
-        .filter_map(|c| {
-            let d = (0..=c.len().saturating_sub(wanted.len()))
-                .filter_map(|i| c.get(i..i + wanted.len().min(c.len())))
-                .map(|sub| edit_distance(wanted, sub))
-                .min()
-                .unwrap_or(usize::MAX)
-                .min(edit_distance(wanted, c));
-            let limit = (wanted.len() / 3).max(1);
-            (d <= limit).then_some((d, c.as_str()))
-        })
-        .collect();
-    scored.sort();
-    scored.into_iter().map(|(_, c)| c).take(8).collect()
-}
-
-/// Levenshtein distance.
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut prev: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut cur = vec![i + 1; b.len() + 1];
-        for (j, cb) in b.iter().enumerate() {
-            cur[j + 1] = (prev[j] + (ca != *cb) as usize)
-                .min(prev[j + 1] + 1)
-                .min(cur[j] + 1);
-        }
-        prev = cur;
-    }
-    prev[b.len()]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn test01_close_names_suggest_typos_and_parts() {
-        let names: Vec<String> = [
-            "prim_cone_shear",
-            "prim_cone_rotate",
-            "shade_phong",
-            "mi_cornell",
-        ]
-        .map(String::from)
-        .to_vec();
-        assert_eq!(
-            close_names("prim_cnoe", &names),
-            ["prim_cone_rotate", "prim_cone_shear"]
-        );
-        assert_eq!(close_names("shade_phnog", &names), ["shade_phong"]);
-        assert_eq!(close_names("cornel", &names), ["mi_cornell"]);
-        assert!(close_names("typo", &names).is_empty());
-    }
 
     #[test]
     fn test02_worst_pixels_rank_by_score_then_position() {

@@ -5,6 +5,7 @@
 
 pub mod catalog;
 pub mod gate;
+pub mod images;
 pub mod manifest;
 pub mod mitsuba;
 pub mod povray;

@@ -126,7 +126,7 @@ fn run() -> Result<ExitCode> {
                 }
             }
             if judged.is_empty() {
-                let close = gate::close_names(&filter, &all);
+                let close = conformance::catalog::close_names(&filter, &all);
                 eprintln!("error: no catalog scene matches '{filter}'");
                 if close.is_empty() {
                     eprintln!("the catalogs are conformance/scenes/povray/ and conformance/scenes/mitsuba/");

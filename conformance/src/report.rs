@@ -16,17 +16,10 @@ use renderer::output::{to_rgb8, ToneMap};
 use std::fmt::Write;
 use std::path::Path;
 
-/// Writes 8-bit RGB pixels as a PNG.
-pub fn save_png(path: &Path, w: u32, h: u32, rgb8: Vec<u8>) -> Result<()> {
-    let img = image::RgbImage::from_raw(w, h, rgb8)
-        .ok_or_else(|| anyhow::anyhow!("image size mismatch"))?;
-    img.save(path)
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
-}
+pub use crate::images::{save_png, z_image};
 
 fn srgb(w: u32, h: u32, rgb: &[f32]) -> Vec<u8> {
-    to_rgb8(&crate::gate::image_of(w, h, rgb), ToneMap::Srgb)
+    to_rgb8(&crate::images::image_of(w, h, rgb), ToneMap::Srgb)
 }
 
 /// The verdict shown for a judged scene ("pass", "FAIL", …; a stale waiver is named).
@@ -82,23 +75,6 @@ fn summary_line(judged: &[Judged]) -> String {
         judged.len(),
         counts.join(", ")
     )
-}
-
-/// A false-colour image of per-pixel z: black to white up to z = 2, orange up to the
-/// Šidák threshold, red beyond it.
-pub fn z_image(z: &[f64], alpha: f64) -> Vec<u8> {
-    let mut out = Vec::with_capacity(z.len() * 3);
-    for &v in z {
-        if crate::mitsuba::stats::p_value(v) <= alpha {
-            out.extend_from_slice(&[230, 0, 0]);
-        } else if v > 2.0 {
-            out.extend_from_slice(&[255, 160, 0]);
-        } else {
-            let g = (v / 2.0 * 200.0) as u8;
-            out.extend_from_slice(&[g, g, g]);
-        }
-    }
-    out
 }
 
 /// Sort key: scenes that need attention first, then waived, then passing; by catalog and

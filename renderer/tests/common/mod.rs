@@ -58,3 +58,5 @@ impl SplitMix {
         }
     }
 }
+
+pub mod extremes;
