@@ -60,3 +60,4 @@ impl SplitMix {
 }
 
 pub mod extremes;
+pub mod primitives;

@@ -1,0 +1,274 @@
+//! The curved primitives (sphere, cylinder, cone; capped and open) against hand-worked
+//! closed forms, one `check` line per case.
+//!
+//! For each hit the helper checks: t against the closed form, the normalized geometric
+//! normal against the analytic outward normal, uv against the mapping documented in the
+//! shape's source, that `Hit.p` is the point o + t·d and lies on the surface within its own
+//! error bound `Hit.err` (finite, non-negative), that scaling the direction by 3 divides t
+//! by 3, that the interval `(t_min, t_max)` is honoured, and that `occluded` agrees.
+
+use glam::DVec3;
+use renderer::aggregate::Shape;
+use std::f64::consts::PI;
+
+mod common;
+use common::primitives::*;
+
+#[test]
+fn sphere() {
+    let s = Shape::Sphere;
+    // Hits from outside; uv = (azimuth, 1 − acos(y)/π).
+    check(
+        &s,
+        [0., 0., -5.],
+        [0., 0., 1.],
+        hit(4.0, [0., 0., -1.], [0.75, 0.5]),
+    );
+    check(
+        &s,
+        [0., 5., 0.],
+        [0., -1., 0.],
+        hit(4.0, [0., 1., 0.], [0.0, 1.0]),
+    );
+    let z = -(0.75f64).sqrt();
+    check(
+        &s,
+        [0.3, 0.4, -5.],
+        [0., 0., 2.],
+        hit(
+            (5.0 + z) / 2.0,
+            [0.3, 0.4, z],
+            [az(0.3, z), 1.0 - 0.4f64.acos() / PI],
+        ),
+    );
+    // A far origin, oblique: |o + t·d|² = 1 solved in closed form.
+    let (o, d) = ([30.0, -20.0, 10.0], [-3.0, 2.0, -1.0]);
+    let t = {
+        let (o, d) = (DVec3::from(o), DVec3::from(d));
+        let (a, b, c) = (d.dot(d), o.dot(d), o.dot(o) - 1.0);
+        (-b - (b * b - a * c).sqrt()) / a
+    };
+    let p = DVec3::from(o) + DVec3::from(d) * t;
+    let uv = [az(p.x, p.z), 1.0 - p.y.acos() / PI];
+    check(&s, o, d, hit(t, p.to_array(), uv));
+    // Misses: beside, and pointing away.
+    check(&s, [0., 1.5, -5.], [0., 0., 1.], Miss);
+    check(&s, [0., 0., -5.], [0., 0., -1.], Miss);
+    // Tangent at (0, 1, 0); just inside and just outside the silhouette.
+    graze(&s, [-5., 1., 0.], [1., 0., 0.], Some([0., 1., 0.]));
+    check(&s, [-5., 1.001, 0.], [1., 0., 0.], Miss);
+    let x = -(1.0f64 - 0.999 * 0.999).sqrt();
+    check(
+        &s,
+        [-5., 0.999, 0.],
+        [1., 0., 0.],
+        hit(
+            5.0 + x,
+            [x, 0.999, 0.],
+            [az(x, 0.), 1.0 - 0.999f64.acos() / PI],
+        ),
+    );
+    // From inside: the far side, outward normal.
+    check(
+        &s,
+        [0., 0., 0.],
+        [1., 0., 0.],
+        hit(1.0, [1., 0., 0.], [0.0, 0.5]),
+    );
+    check(
+        &s,
+        [0.5, 0., 0.],
+        [-1., 0., 0.],
+        hit(1.5, [-1., 0., 0.], [0.5, 0.5]),
+    );
+}
+
+#[test]
+fn cylinder_capped() {
+    let s = Shape::Cylinder { capped: true };
+    // Side uv (azimuth, (y+1)/2); cap uv ((x+1)/2, (z+1)/2).
+    check(
+        &s,
+        [-5., 0.5, 0.],
+        [1., 0., 0.],
+        hit(4.0, [-1., 0., 0.], [0.5, 0.75]),
+    );
+    check(
+        &s,
+        [0.6, 0., -5.],
+        [0., 0., 1.],
+        hit(4.2, [0.6, 0., -0.8], [az(0.6, -0.8), 0.5]),
+    );
+    check(
+        &s,
+        [0.3, 5., -0.2],
+        [0., -1., 0.],
+        hit(4.0, [0., 1., 0.], [0.65, 0.4]),
+    );
+    check(
+        &s,
+        [0., -3., 0.],
+        [0.1, 1., 0.2],
+        hit(2.0, [0., -1., 0.], [0.6, 0.7]),
+    );
+    check(&s, [-5., 1.5, 0.], [1., 0., 0.], Miss);
+    check(&s, [2., 5., 0.], [0., -1., 0.], Miss);
+    // Tangent to the side at (1, 0, 0).
+    graze(&s, [1., 0., -5.], [0., 0., 1.], Some([1., 0., 0.]));
+    check(&s, [1.001, 0., -5.], [0., 0., 1.], Miss);
+    let z = -(1.0f64 - 0.999 * 0.999).sqrt();
+    check(
+        &s,
+        [0.999, 0., -5.],
+        [0., 0., 1.],
+        hit(5.0 + z, [0.999, 0., z], [az(0.999, z), 0.5]),
+    );
+    // Through the rim of the top cap.
+    graze(&s, [1., 5., 0.], [0., -1., 0.], None);
+    // From inside: cap and side, outward normals.
+    check(
+        &s,
+        [0., 0., 0.],
+        [0., 1., 0.],
+        hit(1.0, [0., 1., 0.], [0.5, 0.5]),
+    );
+    check(
+        &s,
+        [0., 0., 0.],
+        [0., 0., 1.],
+        hit(1.0, [0., 0., 1.], [0.25, 0.5]),
+    );
+    check(
+        &s,
+        [0.2, 0.5, 0.],
+        [0., -1., 0.],
+        hit(1.5, [0., -1., 0.], [0.6, 0.5]),
+    );
+}
+
+#[test]
+fn cylinder_open() {
+    let s = Shape::Cylinder { capped: false };
+    check(
+        &s,
+        [-5., 0.5, 0.],
+        [1., 0., 0.],
+        hit(4.0, [-1., 0., 0.], [0.5, 0.75]),
+    );
+    check(
+        &s,
+        [0.6, 0., -5.],
+        [0., 0., 1.],
+        hit(4.2, [0.6, 0., -0.8], [az(0.6, -0.8), 0.5]),
+    );
+    // Down the axis: no caps, so nothing to hit.
+    check(&s, [0.3, 5., 0.], [0., -1., 0.], Miss);
+    check(&s, [-5., 1.5, 0.], [1., 0., 0.], Miss);
+    // In through the open top, onto the inside of the wall: the normal is still outward.
+    check(
+        &s,
+        [0., 2., 0.],
+        [0.5, -1., 0.],
+        hit(2.0, [1., 0., 0.], [0.0, 0.5]),
+    );
+    graze(&s, [1., 0., -5.], [0., 0., 1.], Some([1., 0., 0.]));
+    check(&s, [1.001, 0., -5.], [0., 0., 1.], Miss);
+    // From inside.
+    check(
+        &s,
+        [0., 0., 0.],
+        [0., 0., -1.],
+        hit(1.0, [0., 0., -1.], [0.75, 0.5]),
+    );
+    check(&s, [0., 0., 0.], [0., 1., 0.], Miss);
+}
+
+#[test]
+fn cone_capped() {
+    let s = Shape::Cone { capped: true };
+    // x² + z² = ¼(1 − y)²; side normal (x, ¼(1 − y), z), uv (azimuth, (y+1)/2); cap −y.
+    check(
+        &s,
+        [-5., 0., 0.],
+        [1., 0., 0.],
+        hit(4.5, [-2., 1., 0.], [0.5, 0.5]),
+    );
+    check(
+        &s,
+        [0.2, 5., 0.],
+        [0., -1., 0.],
+        hit(4.4, [2., 1., 0.], [0.0, 0.8]),
+    );
+    check(
+        &s,
+        [0.3, -4., 0.4],
+        [0., 1., 0.],
+        hit(3.0, [0., -1., 0.], [0.65, 0.7]),
+    );
+    // Parallel to the generator on the +x side (the linear branch): F = 0.25 − 0.5·t.
+    check(
+        &s,
+        [-0.5, 1., 0.],
+        [0.5, -1., 0.],
+        hit(0.5, [-2., 1., 0.], [0.5, 0.75]),
+    );
+    // Through the apex along the axis: hits the apex, normal +y by definition.
+    check(
+        &s,
+        [0., 5., 0.],
+        [0., -1., 0.],
+        hit(4.0, [0., 1., 0.], [0.0, 1.0]),
+    );
+    // Misses: beside the tip, and through the upper nappe of the double cone (y > 1).
+    check(&s, [-5., 0.9, 0.2], [1., 0., 0.], Miss);
+    check(&s, [-5., 2., 0.], [1., 0., 0.], Miss);
+    check(&s, [0., -1.5, -5.], [0., 0., 1.], Miss);
+    // Tangent at (0.5, 0, 0), with rays just outside and inside it.
+    graze(&s, [0.5, 0., -5.], [0., 0., 1.], Some([0.5, 0., 0.]));
+    check(&s, [0.501, 0., -5.], [0., 0., 1.], Miss);
+    let z = -(0.25f64 - 0.499 * 0.499).sqrt();
+    check(
+        &s,
+        [0.499, 0., -5.],
+        [0., 0., 1.],
+        hit(5.0 + z, [0.499, 0.25, z], [az(0.499, z), 0.5]),
+    );
+    // From inside: the side and the base, outward normals.
+    check(
+        &s,
+        [0., 0., 0.],
+        [1., 0., 0.],
+        hit(0.5, [2., 1., 0.], [0.0, 0.5]),
+    );
+    check(
+        &s,
+        [0., -0.5, 0.],
+        [0., -1., 0.],
+        hit(0.5, [0., -1., 0.], [0.5, 0.5]),
+    );
+}
+
+#[test]
+fn cone_open() {
+    let s = Shape::Cone { capped: false };
+    check(
+        &s,
+        [-5., 0., 0.],
+        [1., 0., 0.],
+        hit(4.5, [-2., 1., 0.], [0.5, 0.5]),
+    );
+    // Up through the open base onto the inside of the side: normal still outward.
+    check(
+        &s,
+        [0., -5., 0.],
+        [0., 1., 0.],
+        hit(6.0, [0., 1., 0.], [0.0, 1.0]),
+    );
+    check(
+        &s,
+        [0.3, -4., 0.],
+        [0., 1., 0.],
+        hit(4.4, [2., 1., 0.], [0.0, 0.7]),
+    );
+    check(&s, [0., -1.5, -5.], [0., 0., 1.], Miss);
+}

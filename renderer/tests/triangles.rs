@@ -1,0 +1,108 @@
+//! Triangles and meshes against hand-worked closed forms, one `check` line per case.
+//!
+//! For each hit the helper checks: t against the closed form, the normalized geometric
+//! normal against the analytic outward normal, uv against the mapping documented in the
+//! shape's source, that `Hit.p` is the point o + t·d and lies on the surface within its own
+//! error bound `Hit.err` (finite, non-negative), that scaling the direction by 3 divides t
+//! by 3, that the interval `(t_min, t_max)` is honoured, and that `occluded` agrees.
+
+mod common;
+use common::primitives::*;
+
+#[test]
+fn triangle_cases() {
+    let s = triangle();
+    // The plane x + y/2 + z/3 = 1 meets the diagonal at (6/11)(1,1,1); barycentrics
+    // (6/11, 3/11, 2/11); default uv = (b1, b2).
+    let uv = [3.0 / 11.0, 2.0 / 11.0];
+    check(
+        &s,
+        [2., 2., 2.],
+        [-1., -1., -1.],
+        hit(2.0 - 6.0 / 11.0, [6., 3., 2.], uv),
+    );
+    // From behind: same t formula, normal still (p1 − p0) × (p2 − p0).
+    check(
+        &s,
+        [0., 0., 0.],
+        [1., 1., 1.],
+        hit(6.0 / 11.0, [6., 3., 2.], uv),
+    );
+    check(
+        &s,
+        [0., 0., 0.],
+        [3., 3., 3.],
+        hit(2.0 / 11.0, [6., 3., 2.], uv),
+    );
+    // Vertex uvs are interpolated: (0,0)·b0 + (1,0)·b1 + (0.5,1)·b2.
+    let s_uv = triangle_with_uv();
+    check(
+        &s_uv,
+        [0., 0., 0.],
+        [1., 1., 1.],
+        hit(6.0 / 11.0, [6., 3., 2.], [4.0 / 11.0, 2.0 / 11.0]),
+    );
+    // Misses: away, and through the plane outside the triangle (y < 0).
+    check(&s, [0., 0., 0.], [-1., -1., -1.], Miss);
+    check(&s, [0., 0., 0.], [1., -0.1, 1.], Miss);
+    // In the plane along an edge (parallel), and exactly through an edge's midpoint.
+    graze(&s, [2., -2., 0.], [-1., 2., 0.], None);
+    check(&s, [2., -2., 0.], [-1., 2., 0.], Miss);
+    graze(&s, [6.5, 4., 2.], [-6., -3., -2.], Some([0.5, 1., 0.]));
+}
+
+#[test]
+fn mesh_quad() {
+    let s = quad_mesh(true);
+    check(
+        &s,
+        [0.2, 1., -0.4],
+        [0., -1., 0.],
+        hit(1.0, [0., 1., 0.], [0.6, 0.3]),
+    );
+    check(
+        &s,
+        [0., 2., 0.],
+        [0.25, -1., -0.25],
+        hit(2.0, [0., 1., 0.], [0.75, 0.25]),
+    );
+    // Exactly on the shared diagonal: watertight, so it must hit.
+    check(
+        &s,
+        [0.3, 1., 0.3],
+        [0., -1., 0.],
+        hit(1.0, [0., 1., 0.], [0.65, 0.65]),
+    );
+    check(
+        &s,
+        [0., 1., 0.],
+        [0., -1., 0.],
+        hit(1.0, [0., 1., 0.], [0.5, 0.5]),
+    );
+    check(
+        &s,
+        [-0.9, 1., 0.9],
+        [0., -1., 0.],
+        hit(1.0, [0., 1., 0.], [0.05, 0.95]),
+    );
+    check(&s, [1.5, 1., 0.], [0., -1., 0.], Miss);
+    check(&s, [0., 1., 0.], [0., 1., 0.], Miss);
+    graze(&s, [-5., 0., 0.3], [1., 0., 0.], None);
+    graze(&s, [1., 1., 0.2], [0., -1., 0.], Some([1., 0., 0.2]));
+    // From the far side.
+    check(
+        &s,
+        [-0.5, -1., 0.5],
+        [0., 1., 0.],
+        hit(1.0, [0., 1., 0.], [0.25, 0.75]),
+    );
+    // Without vertex uvs, uv = (b1, b2) of the triangle hit: (−0.5, 0, 0.5) in triangle
+    // (−1,0,−1), (−1,0,1), (1,0,1) has b = (0.25, 0.5, 0.25).
+    let s = quad_mesh(false);
+    check(
+        &s,
+        [-0.5, 1., 0.5],
+        [0., -1., 0.],
+        hit(1.0, [0., 1., 0.], [0.5, 0.25]),
+    );
+}
