@@ -42,6 +42,16 @@ md.append("|---|---|---|")
 shift = {(r[0], r[1]): r[2] for r in get("SHIFT")}
 for s in sorted({r[1] for r in get("SHIFT")}, key=float):
     md.append(f"| {float(s):.0e} | {shift.get(('f32', s), '-')} | {shift.get(('f64', s), '-')} |")
+md.append("\n### Depth range inside one view: surfaces a relative gap apart at distance D from the eye\n")
+md.append("A rectangle lies a gap g = ρ·D above a plane, both at distance D from the eye, seen from above (the eye is the render-space origin, so rebasing cannot help). The table gives the percentage of the central pixels, all on the rectangle, that show the plane instead: where the two surfaces merge.\n")
+depth = get("DEPTH")
+rels = sorted({r[2] for r in depth}, key=lambda v: -float(v))
+md.append("| D | build | " + " | ".join(f"ρ = {float(r):.0e}" for r in rels) + " |")
+md.append("|---|---|" + "---|" * len(rels))
+for d in sorted({r[1] for r in depth}, key=float):
+    for p in ("f32", "f64"):
+        vals = {r[2]: r[3] for r in depth if r[0] == p and r[1] == d}
+        md.append(f"| {float(d):.0e} | {p} | " + " | ".join(vals.get(r, "-") for r in rels) + " |")
 md.append("\n### Self-intersection strategies\n")
 md.append("Self-hits: spawned rays (uniform over the outward hemisphere) that hit their own sphere again, over 4,000 random instances (rotation, non-uniform scale). Leaks: shadow rays from a plane that pass a thin plate held a small gap above it.\n")
 md.append("| build | strategy | self-hits at the origin (%) | self-hits, translation 1e5 (%) | self-hits, translation 1e6 and scale 1e±4 (%) | leaks, gap 1e-2 (%) | leaks, gap 1e-4 (%) |")

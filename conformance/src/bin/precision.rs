@@ -233,6 +233,60 @@ transform = [{{ translate = [{d}, {f}, {d}] }}]
     a.iter().zip(&b).filter(|(x, y)| x != y).count() as f64 / a.len() as f64
 }
 
+/// Depth range inside one view: a rectangle lying `gap` above a plane, both at distance
+/// `dist` from the eye (which is the render-space origin, so rebasing cannot help), seen
+/// from above. Returns the fraction of the central pixels (all on the rectangle) whose
+/// object id is not the rectangle's: where the two surfaces merge in this precision.
+fn depth_range(dist: f64, gap: f64) -> f64 {
+    let text = format!(
+        r#"
+[camera.look_at]
+from = [0, {h}, 0]
+at = [0, 0, {dist}]
+up = [0, 1, 0]
+fov = 40
+[render]
+width = 96
+height = 72
+[[objects]]
+type = "plane"
+[[objects]]
+type = "rectangle"
+transform = [{{ scale = {half} }}, {{ translate = [0, {gap}, {dist}] }}]
+"#,
+        h = dist / 2.0,
+        half = dist / 2.0,
+    );
+    let s = Scene::from_str(
+        &text,
+        std::path::Path::new("depth.toml"),
+        std::path::Path::new("."),
+    )
+    .unwrap();
+    let ids = render(
+        &s,
+        &Options {
+            threads: Some(2),
+            aov: true,
+            ..Options::default()
+        },
+    )
+    .aov
+    .unwrap()
+    .object_id;
+    let (w, h) = (96, 72);
+    let (mut wrong, mut n) = (0, 0);
+    for j in h * 3 / 10..h * 7 / 10 {
+        for i in w * 3 / 10..w * 7 / 10 {
+            n += 1;
+            if ids[j * w + i] != 2.0 {
+                wrong += 1;
+            }
+        }
+    }
+    wrong as f64 / n as f64
+}
+
 fn primary_throughput() -> f64 {
     let cam = Camera::new(
         ViewingModel::look_at(
@@ -312,6 +366,14 @@ fn main() {
             "SHIFT|{PRECISION}|{shift:e}|{:.4}",
             translated_scene(shift) * 100.0
         );
+    }
+    for dist in [1e2, 1e4, 1e6] {
+        for rel in [1e-6, 1e-7, 3e-8, 1e-8, 1e-9] {
+            println!(
+                "DEPTH|{PRECISION}|{dist:e}|{rel:e}|{:.1}",
+                depth_range(dist, dist * rel) * 100.0
+            );
+        }
     }
     for (name, sp) in strategies() {
         let hits: Vec<String> = [(0.0, 0.0), (1e5, 0.0), (1e6, 4.0)]
