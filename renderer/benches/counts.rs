@@ -95,17 +95,8 @@ fn parse(rel: &str) -> usize {
     black_box(scene.objects.len())
 }
 
-library_benchmark_group!(
-    name = build,
-    benchmarks = [build_spheres, build_mesh]
-);
-library_benchmark_group!(
-    name = trace,
-    benchmarks = [primary_spheres, primary_mesh]
-);
-library_benchmark_group!(
-    name = frames,
-    benchmarks = [frame, parse]
-);
+library_benchmark_group!(name = build, benchmarks = [build_spheres, build_mesh]);
+library_benchmark_group!(name = trace, benchmarks = [primary_spheres, primary_mesh]);
+library_benchmark_group!(name = frames, benchmarks = [frame, parse]);
 
 main!(library_benchmark_groups = build, trace, frames);

@@ -1,0 +1,361 @@
+//! Our side of `scripts/bench-peers.sh` (wall clock, side by side with the peers).
+//!
+//! - `peers mesh DIR [--quick]`: builds the ~1M-triangle mesh (784 icospheres of 1,280
+//!   triangles over a ground quad), writes it and four ray sets (coherent primary, shuffled
+//!   primary, occlusion toward a light, diffuse bounce) to DIR as raw little-endian arrays
+//!   for Embree (embreex) to read, then times our single-ray closest hit (and any hit for
+//!   the occlusion rays) on 1 and 2 threads, and the BVH build. Prints JSON.
+//! - `peers growth [--quick]`: time per primary ray from 100 to 10⁶ primitives, for
+//!   spheres and for triangles. Prints JSON.
+//!
+//! Run it through the script: `cargo bench -p renderer --bench peers -- mesh DIR`.
+
+use glam::DVec3;
+use renderer::aggregate::{Aggregate, Instance, Shape};
+use renderer::ray::Ray;
+use renderer::real::{Real, Vec3};
+use renderer::shapes::Mesh;
+use std::fmt::Write;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::Instant;
+
+mod common;
+
+/// A deterministic uniform number in [0, 1).
+fn rnd(state: &mut u64) -> f64 {
+    *state = renderer::sampler::mix64(state.wrapping_add(0x9e37_79b9_7f4a_7c15));
+    (*state >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// An icosphere: the icosahedron subdivided `levels` times (20·4^levels triangles).
+fn icosphere(levels: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let t = (1.0 + 5f64.sqrt()) / 2.0;
+    let mut v: Vec<DVec3> = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| DVec3::new(x, y, z).normalize())
+    .collect();
+    let mut f: Vec<[u32; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..levels {
+        let mut mid = std::collections::BTreeMap::new();
+        let mut split = |a: u32, b: u32, v: &mut Vec<DVec3>| -> u32 {
+            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                v.push(((v[a as usize] + v[b as usize]) * 0.5).normalize());
+                v.len() as u32 - 1
+            })
+        };
+        let mut next = Vec::with_capacity(f.len() * 4);
+        for [a, b, c] in f {
+            let (ab, bc, ca) = (
+                split(a, b, &mut v),
+                split(b, c, &mut v),
+                split(c, a, &mut v),
+            );
+            next.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
+        }
+        f = next;
+    }
+    (v, f)
+}
+
+/// 784 icospheres (28 × 28, 1,280 triangles each) over a ground quad: 1,003,522 triangles.
+fn big_mesh() -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let (sv, sf) = icosphere(3);
+    let (mut pos, mut tris) = (Vec::new(), Vec::new());
+    let mut s = 11u64;
+    for gz in 0..28 {
+        for gx in 0..28 {
+            let r = 0.25 + 0.15 * rnd(&mut s);
+            let c = DVec3::new(gx as f64 - 13.5, r, gz as f64 - 13.5);
+            let base = pos.len() as u32;
+            pos.extend(sv.iter().map(|p| {
+                let q = c + *p * r;
+                Vec3::new(q.x as Real, q.y as Real, q.z as Real)
+            }));
+            tris.extend(sf.iter().map(|t| t.map(|k| k + base)));
+        }
+    }
+    let base = pos.len() as u32;
+    for (x, z) in [(-20.0, -20.0), (20.0, -20.0), (20.0, 20.0), (-20.0, 20.0)] {
+        pos.push(Vec3::new(x, 0.0, z));
+    }
+    tris.push([base, base + 2, base + 1]);
+    tris.push([base, base + 3, base + 2]);
+    (pos, tris)
+}
+
+struct RaySet {
+    name: &'static str,
+    rays: Vec<(Ray, Real)>,
+}
+
+fn camera(w: u32, h: u32) -> renderer::camera::Camera {
+    let m = renderer::camera::ViewingModel::look_at(
+        DVec3::new(0.0, 9.0, -22.0),
+        DVec3::new(0.0, 0.0, -2.0),
+        DVec3::Y,
+        55.0,
+        renderer::camera::FovAxis::Horizontal,
+        w,
+        h,
+    )
+    .unwrap();
+    renderer::camera::Camera::new(m).unwrap()
+}
+
+/// The four ray sets, all from the same camera: primary rays in pixel order and shuffled,
+/// shadow rays from each primary hit to a light (t < 1), and cosine-distributed bounce
+/// rays from each primary hit.
+fn ray_sets(agg: &Aggregate, w: u32, h: u32) -> Vec<RaySet> {
+    let cam = camera(w, h);
+    let inf = Real::INFINITY;
+    let primary: Vec<(Ray, Real)> = (0..h)
+        .flat_map(|j| (0..w).map(move |i| (i, j)))
+        .map(|(i, j)| (cam.pixel_ray(i, j), inf))
+        .collect();
+    let mut shuffled = primary.clone();
+    let mut s = 5u64;
+    for k in (1..shuffled.len()).rev() {
+        let j = (rnd(&mut s) * (k + 1) as f64) as usize;
+        shuffled.swap(k, j.min(k));
+    }
+    let light = Vec3::new(-30.0, 40.0, -25.0);
+    let (mut shadow, mut bounce) = (Vec::new(), Vec::new());
+    for (r, _) in &primary {
+        if let Some(hit) = agg.intersect(r, 0.0, inf) {
+            let n = hit.n_geo.normalize();
+            let n = if n.dot(r.d) > 0.0 { -n } else { n };
+            let o = hit.p + n * 1e-3;
+            shadow.push((Ray::new(o, light - o), 1.0));
+            // Cosine-weighted about n.
+            let (u1, u2) = (rnd(&mut s), rnd(&mut s));
+            let (rr, ph) = (u1.sqrt(), 2.0 * std::f64::consts::PI * u2);
+            let nd = DVec3::new(n.x as f64, n.y as f64, n.z as f64);
+            let a = if nd.x.abs() > 0.9 { DVec3::Y } else { DVec3::X };
+            let t = nd.cross(a).normalize();
+            let b = nd.cross(t);
+            let d = t * (rr * ph.cos()) + b * (rr * ph.sin()) + nd * (1.0 - u1).sqrt();
+            bounce.push((
+                Ray::new(o, Vec3::new(d.x as Real, d.y as Real, d.z as Real)),
+                inf,
+            ));
+        }
+    }
+    vec![
+        RaySet {
+            name: "coherent",
+            rays: primary,
+        },
+        RaySet {
+            name: "shuffled",
+            rays: shuffled,
+        },
+        RaySet {
+            name: "occlusion",
+            rays: shadow,
+        },
+        RaySet {
+            name: "bounce",
+            rays: bounce,
+        },
+    ]
+}
+
+/// Writes numbers as little-endian f32 (what embreex reads; the f64 build rounds).
+fn write_f32(path: &Path, data: impl Iterator<Item = Real>) {
+    let bytes: Vec<u8> = data.flat_map(|x| (x as f32).to_le_bytes()).collect();
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// Writes little-endian u32.
+fn write_u32(path: &Path, data: impl Iterator<Item = u32>) {
+    let bytes: Vec<u8> = data.flat_map(|x| x.to_le_bytes()).collect();
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// Rays per second (millions) of `f` over `rays` on `threads` threads, repeated for at
+/// least `secs` seconds; returns (Mrays/s, hits).
+fn time_rays(
+    rays: &[(Ray, Real)],
+    threads: usize,
+    secs: f64,
+    f: &(dyn Fn(&Ray, Real) -> bool + Sync),
+) -> (f64, usize) {
+    use rayon::prelude::*;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let run = || {
+            rays.par_chunks(4096)
+                .map(|c| c.iter().filter(|(r, t)| f(r, *t)).count())
+                .sum::<usize>()
+        };
+        let hits = run();
+        let t0 = Instant::now();
+        let mut n = 0usize;
+        while t0.elapsed().as_secs_f64() < secs {
+            std::hint::black_box(run());
+            n += rays.len();
+        }
+        (n as f64 / t0.elapsed().as_secs_f64() / 1e6, hits)
+    })
+}
+
+fn mesh(dir: &Path, quick: bool) {
+    std::fs::create_dir_all(dir).unwrap();
+    let (pos, tris) = big_mesh();
+    let t0 = Instant::now();
+    let m = Mesh::new(pos.clone(), None, None, tris.clone()).unwrap();
+    let agg = Aggregate::new(vec![Instance {
+        shape: Shape::Mesh(Arc::new(m)),
+        xf: None,
+        material: 0,
+        object_id: 1,
+    }]);
+    let build = t0.elapsed().as_secs_f64();
+    let (w, h) = (640, 480);
+    let sets = ray_sets(&agg, w, h);
+    write_f32(
+        &dir.join("vertices.f32"),
+        pos.iter().flat_map(|p| [p.x, p.y, p.z]),
+    );
+    write_u32(&dir.join("indices.u32"), tris.iter().flatten().copied());
+    let secs = if quick { 0.3 } else { 2.0 };
+    let mut json = format!(
+        "{{\"triangles\": {}, \"build_seconds\": {build:.4}, \"sets\": [",
+        tris.len()
+    );
+    for (k, set) in sets.iter().enumerate() {
+        write_f32(
+            &dir.join(format!("rays_{}.f32", set.name)),
+            set.rays
+                .iter()
+                .flat_map(|(r, t)| [r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, *t]),
+        );
+        let closest = |r: &Ray, t: Real| agg.intersect(r, 0.0, t).is_some();
+        let any = |r: &Ray, t: Real| agg.occluded(r, 0.0, t);
+        let mut parts = Vec::new();
+        for threads in [1, 2] {
+            let (c, hc) = time_rays(&set.rays, threads, secs, &closest);
+            let (a, ha) = time_rays(&set.rays, threads, secs, &any);
+            assert_eq!(hc, ha, "closest and any hit disagree on {}", set.name);
+            parts.push(format!(
+                "{{\"threads\": {threads}, \"closest_mrays\": {c:.4}, \"any_mrays\": {a:.4}, \"hits\": {hc}}}"
+            ));
+        }
+        write!(
+            json,
+            "{}{{\"name\": \"{}\", \"rays\": {}, \"runs\": [{}]}}",
+            if k > 0 { ", " } else { "" },
+            set.name,
+            set.rays.len(),
+            parts.join(", ")
+        )
+        .unwrap();
+    }
+    json.push_str("]}");
+    println!("{json}");
+}
+
+/// Seconds per primary ray (128² pixel centres, one thread) on `agg`.
+fn per_ray(agg: &Aggregate, secs: f64) -> f64 {
+    let cam = common::camera();
+    common::trace_all(&cam, agg);
+    let t0 = Instant::now();
+    let mut n = 0u64;
+    while t0.elapsed().as_secs_f64() < secs {
+        std::hint::black_box(common::trace_all(&cam, agg));
+        n += (common::RES * common::RES) as u64;
+    }
+    t0.elapsed().as_secs_f64() / n as f64
+}
+
+fn growth(quick: bool) {
+    let secs = if quick { 0.2 } else { 1.0 };
+    let mut rows = Vec::new();
+    // Spheres in a layer facing the camera (the image covered the same at every N) and
+    // in a cloud filling a cube (deeper for larger N).
+    for (kind, make) in [
+        (
+            "spheres (front layer)",
+            common::front as fn(usize) -> Aggregate,
+        ),
+        ("spheres (cloud)", common::cloud),
+    ] {
+        for n in [100usize, 10_000, 1_000_000] {
+            let t = per_ray(&make(n), secs);
+            rows.push(format!(
+                "{{\"kind\": \"{kind}\", \"n\": {n}, \"ns_per_ray\": {:.2}}}",
+                t * 1e9
+            ));
+        }
+    }
+    // UV spheres of 2·nu·nv triangles: 100, 10,000 and 1,000,000.
+    for (nu, nv) in [(10usize, 5usize), (100, 50), (1000, 500)] {
+        let agg = Aggregate::new(vec![Instance {
+            shape: Shape::Mesh(Arc::new(common::mesh(nu, nv))),
+            xf: None,
+            material: 0,
+            object_id: 1,
+        }]);
+        let t = per_ray(&agg, secs);
+        rows.push(format!(
+            "{{\"kind\": \"triangles\", \"n\": {}, \"ns_per_ray\": {:.2}}}",
+            2 * nu * nv,
+            t * 1e9
+        ));
+    }
+    println!("{{\"growth\": [{}]}}", rows.join(", "));
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| a != "--bench")
+        .collect();
+    let quick = args.iter().any(|a| a == "--quick");
+    match args.first().map(String::as_str) {
+        Some("mesh") => mesh(Path::new(args.get(1).expect("peers mesh DIR")), quick),
+        Some("growth") => growth(quick),
+        _ => {
+            eprintln!("usage: peers mesh DIR [--quick] | peers growth [--quick] (see scripts/bench-peers.sh)");
+            std::process::exit(2);
+        }
+    }
+}
