@@ -79,6 +79,19 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 fn main() -> ExitCode {
+    // SIGINT and SIGTERM: remove any temp file an interrupted write left, then exit with
+    // the shell's code for an interrupt. An existing output is never touched.
+    let _ = ctrlc::set_handler(|| {
+        output::remove_temp_files();
+        eprintln!("interrupted: no output written");
+        std::process::exit(130);
+    });
+    if let Some(ms) = std::env::var("RENDERER_FAULT_SLOW_WRITE_MS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    {
+        output::SLOW_WRITE_MS.store(ms, std::sync::atomic::Ordering::Relaxed);
+    }
     match run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -115,17 +128,28 @@ fn run() -> Result<()> {
             overrides.check().map_err(anyhow::Error::msg)?;
             let s = Scene::load_with(&scene, &overrides)?;
             let t0 = std::time::Instant::now();
-            let img = render::render(
-                &s,
-                &Options {
-                    threads,
-                    aov,
-                    progress: true,
-                    spawn,
-                    ..Options::default()
-                },
-            );
+            let opts = Options {
+                aov,
+                progress: true,
+                spawn,
+                ..Options::default()
+            };
+            let img = match threads {
+                Some(n) => rayon::ThreadPoolBuilder::new()
+                    .num_threads(n.max(1))
+                    .build()
+                    .map_err(|e| anyhow::anyhow!("--threads {n}: cannot start {n} threads ({e})"))?
+                    .install(|| render::render(&s, &opts)),
+                None => render::render(&s, &opts),
+            };
             let secs = t0.elapsed().as_secs_f64();
+            anyhow::ensure!(
+                img.non_finite == 0,
+                "{}: {} pixel(s) came out non-finite (NaN or infinite); no output written. \
+Check the scene's numbers (renderer/docs/robustness.md)",
+                scene.display(),
+                img.non_finite
+            );
             output::write(&img, &out, map).with_context(|| format!("writing {}", out.display()))?;
             eprintln!(
                 "{}: {}x{} px, {} spp, {:.3} s -> {}",

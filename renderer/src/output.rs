@@ -4,7 +4,7 @@
 
 use crate::render::Image;
 use anyhow::{bail, Context, Result};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// How linear intensities map to the 8-bit device range.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
@@ -73,33 +73,124 @@ pub fn to_rgb8(img: &Image, map: ToneMap) -> Vec<u8> {
         .collect()
 }
 
-/// Writes a PNG or EXR, by the file's extension.
+/// Temp files being written, so a signal handler can remove them ([`remove_temp_files`]).
+static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// A fault for tests: milliseconds to wait after the temp file is created and before it is
+/// written, so a test can deliver a signal while an output is being written (the CLI sets
+/// it from `RENDERER_FAULT_SLOW_WRITE_MS`). 0 in normal use.
+pub static SLOW_WRITE_MS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// Removes every temp file an interrupted write left (called from the CLI's SIGINT and
+/// SIGTERM handler before it exits).
+pub fn remove_temp_files() {
+    let pending = PENDING.lock().unwrap_or_else(|e| e.into_inner());
+    for p in pending.iter() {
+        let _ = std::fs::remove_file(p);
+    }
+}
+
+/// A temp file beside the output, registered for removal on a signal, and removed on drop
+/// unless it was moved into place.
+struct TempFile {
+    path: PathBuf,
+    file: std::fs::File,
+    kept: bool,
+}
+
+impl TempFile {
+    fn create(out: &Path) -> Result<TempFile> {
+        let path = temp_path(out);
+        let mut pending = PENDING.lock().unwrap_or_else(|e| e.into_inner());
+        let open = || {
+            std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+        };
+        let file = match open() {
+            // Left by an earlier process that had our PID: it is not being written now.
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                let _ = std::fs::remove_file(&path);
+                open()
+            }
+            r => r,
+        }
+        .with_context(|| format!("cannot create {}", path.display()))?;
+        pending.push(path.clone());
+        Ok(TempFile {
+            path,
+            file,
+            kept: false,
+        })
+    }
+
+    /// Makes the data durable and moves the file over `out`.
+    fn persist(mut self, out: &Path) -> Result<()> {
+        self.file
+            .sync_all()
+            .with_context(|| format!("cannot write {} (sync)", self.path.display()))?;
+        std::fs::rename(&self.path, out)
+            .with_context(|| format!("cannot move the output into {}", out.display()))?;
+        self.kept = true;
+        // The rename itself is durable once the directory is synced (best effort: some
+        // file systems do not let a directory be opened for syncing).
+        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            if let Ok(d) = std::fs::File::open(dir) {
+                let _ = d.sync_all();
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        if !self.kept {
+            let _ = std::fs::remove_file(&self.path);
+        }
+        let mut pending = PENDING.lock().unwrap_or_else(|e| e.into_inner());
+        pending.retain(|p| p != &self.path);
+    }
+}
+
+/// Writes a PNG or EXR, by the file's extension. The image goes to a temp file beside the
+/// output (`.NAME.PID.tmp`), which is flushed, synced and checked, then renamed over the
+/// output: an existing output is replaced only by a complete new file. On any error the
+/// temp file is removed. Temp files of dead processes, left by a crash or a power loss,
+/// are removed first.
 pub fn write(img: &Image, path: &Path, map: ToneMap) -> Result<()> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase())
         .unwrap_or_default();
-    let tmp = temp_path(path);
-    let result = match ext.as_str() {
-        "png" => write_png(img, &tmp, map),
-        "exr" => write_exr(img, &tmp),
-        _ => bail!(
+    if ext != "png" && ext != "exr" {
+        bail!(
             "{}: unknown output format (use .png or .exr)",
             path.display()
-        ),
-    };
-    match result {
-        Ok(()) => std::fs::rename(&tmp, path)
-            .with_context(|| format!("cannot move the output into {}", path.display())),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
+        );
     }
+    remove_stale_temp_files(path);
+    let tmp = TempFile::create(path)?;
+    let delay = SLOW_WRITE_MS.load(std::sync::atomic::Ordering::Relaxed);
+    if delay > 0 {
+        std::thread::sleep(std::time::Duration::from_millis(delay));
+    }
+    let mut w = std::io::BufWriter::new(&tmp.file);
+    match ext.as_str() {
+        "png" => encode_png(img, &mut w, map),
+        _ => encode_exr(img, &mut w),
+    }
+    .with_context(|| format!("cannot write {}", tmp.path.display()))?;
+    // The final flush's error must not be lost when the writer is dropped.
+    w.into_inner()
+        .map_err(|e| e.into_error())
+        .with_context(|| format!("cannot write {}", tmp.path.display()))?;
+    tmp.persist(path)
 }
 
-fn temp_path(path: &Path) -> std::path::PathBuf {
+fn temp_path(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -107,20 +198,61 @@ fn temp_path(path: &Path) -> std::path::PathBuf {
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
-fn write_png(img: &Image, path: &Path, map: ToneMap) -> Result<()> {
+/// Removes `.NAME.PID.tmp` files beside `path` whose process no longer runs (Linux: no
+/// `/proc/PID`; elsewhere none are removed).
+fn remove_stale_temp_files(path: &Path) {
+    let Some(name) = path.file_name().map(|n| n.to_string_lossy().into_owned()) else {
+        return;
+    };
+    if !Path::new("/proc/self").exists() {
+        return;
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let prefix = format!(".{name}.");
+    for e in entries.flatten() {
+        let file = e.file_name().to_string_lossy().into_owned();
+        let Some(pid) = file
+            .strip_prefix(&prefix)
+            .and_then(|r| r.strip_suffix(".tmp"))
+            .and_then(|p| p.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists() {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
+fn encode_png(img: &Image, w: &mut impl std::io::Write, map: ToneMap) -> Result<()> {
     let buf = image::RgbImage::from_raw(img.width, img.height, to_rgb8(img, map))
         .context("image size mismatch")?;
-    let file =
-        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    let enc = image::codecs::png::PngEncoder::new(std::io::BufWriter::new(file));
-    buf.write_with_encoder(enc)
-        .with_context(|| format!("cannot write {}", path.display()))
+    let enc = image::codecs::png::PngEncoder::new(w);
+    buf.write_with_encoder(enc)?;
+    Ok(())
 }
 
 /// Writes a 32-bit float, linear EXR; with AOVs adds Z, N.X/Y/Z, P.X/Y/Z and objectId.
 pub fn write_exr(img: &Image, path: &Path) -> Result<()> {
+    let file =
+        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    let mut w = std::io::BufWriter::new(file);
+    encode_exr(img, &mut w).with_context(|| format!("cannot write {}", path.display()))?;
+    w.into_inner()
+        .map_err(|e| e.into_error())
+        .and_then(|f| f.sync_all())
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn encode_exr(img: &Image, w: &mut (impl std::io::Write + std::io::Seek)) -> Result<()> {
     use exr::prelude::*;
-    let (w, h) = (img.width as usize, img.height as usize);
+    let (wd, h) = (img.width as usize, img.height as usize);
     let chan = |name: &str, data: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(data));
     let plane = |src: &[f32], stride: usize, k: usize| -> Vec<f32> {
         src.iter().skip(k).step_by(stride).copied().collect()
@@ -139,15 +271,97 @@ pub fn write_exr(img: &Image, path: &Path) -> Result<()> {
         channels.push(chan("objectId", a.object_id.clone()));
     }
     let layer = Layer::new(
-        (w, h),
+        (wd, h),
         LayerAttributes::default(),
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(channels.into()),
     );
     exr::prelude::Image::from_layer(layer)
         .write()
-        .to_file(path)
-        .with_context(|| format!("cannot write {}", path.display()))
+        .to_buffered(w)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod write_tests {
+    use super::*;
+
+    /// A writer that fails once `limit` bytes have been written (a full disk).
+    struct Full {
+        data: Vec<u8>,
+        pos: u64,
+        limit: usize,
+    }
+
+    impl std::io::Write for Full {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            if self.data.len() + b.len() > self.limit {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::StorageFull,
+                    "disk full",
+                ));
+            }
+            self.data.extend_from_slice(b);
+            self.pos += b.len() as u64;
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+
+    impl std::io::Seek for Full {
+        fn seek(&mut self, p: std::io::SeekFrom) -> std::io::Result<u64> {
+            if let std::io::SeekFrom::Start(n) = p {
+                self.pos = n;
+            }
+            Ok(self.pos)
+        }
+    }
+
+    fn image() -> Image {
+        let (w, h) = (64u32, 48u32);
+        let rgb = (0..w * h * 3)
+            .map(|k| ((k * 7919) % 1000) as f32 / 1000.0)
+            .collect();
+        Image {
+            width: w,
+            height: h,
+            rgb,
+            aov: None,
+            non_finite: 0,
+            moments: None,
+        }
+    }
+
+    #[test]
+    fn a_full_disk_is_an_error_for_every_format() {
+        let img = image();
+        for limit in [0, 100, 2000] {
+            let mut w = std::io::BufWriter::new(Full {
+                data: Vec::new(),
+                pos: 0,
+                limit,
+            });
+            let png = encode_png(&img, &mut w, ToneMap::Srgb).and_then(|()| {
+                w.into_inner()
+                    .map(|_| ())
+                    .map_err(|e| e.into_error().into())
+            });
+            assert!(png.is_err(), "PNG with {limit} bytes free must fail");
+            let mut w = std::io::BufWriter::new(Full {
+                data: Vec::new(),
+                pos: 0,
+                limit,
+            });
+            let exr = encode_exr(&img, &mut w).and_then(|()| {
+                w.into_inner()
+                    .map(|_| ())
+                    .map_err(|e| e.into_error().into())
+            });
+            assert!(exr.is_err(), "EXR with {limit} bytes free must fail");
+        }
+    }
 }
 
 /// A float image read from an EXR: channels by name, each `width × height`, top row first.
