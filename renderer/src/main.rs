@@ -134,14 +134,18 @@ fn run() -> Result<()> {
                 spawn,
                 ..Options::default()
             };
-            let img = match threads {
-                Some(n) => rayon::ThreadPoolBuilder::new()
-                    .num_threads(n.max(1))
-                    .build()
-                    .map_err(|e| anyhow::anyhow!("--threads {n}: cannot start {n} threads ({e})"))?
-                    .install(|| render::render(&s, &opts)),
-                None => render::render(&s, &opts),
-            };
+            // Render threads with stacks deep enough for the deepest scene the build accepts.
+            let mut pool = rayon::ThreadPoolBuilder::new().stack_size(render::STACK_SIZE);
+            if let Some(n) = threads {
+                pool = pool.num_threads(n.max(1));
+            }
+            let img = pool
+                .build()
+                .map_err(|e| match threads {
+                    Some(n) => anyhow::anyhow!("--threads {n}: cannot start {n} threads ({e})"),
+                    None => anyhow::anyhow!("cannot start the render threads ({e})"),
+                })?
+                .install(|| render::render(&s, &opts));
             let secs = t0.elapsed().as_secs_f64();
             anyhow::ensure!(
                 img.non_finite == 0,

@@ -67,12 +67,25 @@ pub struct Options {
     pub fault: Option<crate::physical::Fault>,
 }
 
-/// Renders `scene`.
+/// Stack size of the render threads: tracing recurses once per trace level (at most
+/// `MAX_DEPTH` + `MAX_PASS_THROUGH`) and once per level of nested definitions (at most
+/// `MAX_NESTING`), up to about 50 KB a level; 64 MiB holds the deepest scene the limits
+/// allow with room to spare (address space only: untouched pages cost nothing).
+pub const STACK_SIZE: usize = 64 << 20;
+
+/// Renders `scene`. With `opts.threads` it renders in its own pool of render threads;
+/// without, in the current rayon pool, whose threads must have [`STACK_SIZE`] of stack for
+/// the deepest scenes the build accepts (the CLI sets up such a global pool).
+///
+/// # Panics
+/// When `opts.threads` is given and the threads cannot be started; build the pool
+/// yourself to handle that (the CLI does).
 pub fn render(scene: &Scene, opts: &Options) -> Image {
     match opts.threads {
         Some(n) => {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(n.max(1))
+                .stack_size(STACK_SIZE)
                 .build()
                 .expect("a rayon thread pool with a fixed thread count");
             pool.install(|| render_in_pool(scene, opts))

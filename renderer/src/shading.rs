@@ -33,6 +33,8 @@ const MAX_INTERIORS: usize = 16;
 pub struct Interiors {
     ids: [(u64, f32); MAX_INTERIORS],
     len: usize,
+    /// Surfaces this path has passed straight through (ior the same on both sides).
+    passes: u32,
 }
 
 impl Default for Interiors {
@@ -40,9 +42,16 @@ impl Default for Interiors {
         Interiors {
             ids: [(0, 1.0); MAX_INTERIORS],
             len: 0,
+            passes: 0,
         }
     }
 }
+
+/// Surfaces a path may pass straight through (the same ior on both sides) without using up
+/// a trace level; past that each one uses a level, as a refraction does. Without it, a ray
+/// through thousands of such surfaces recursed once per surface, whatever `max_depth`
+/// said, and overflowed the stack (renderer/docs/robustness.md).
+pub const MAX_PASS_THROUGH: u32 = 64;
 
 impl Interiors {
     fn top(&self) -> Option<(u64, f32)> {
@@ -215,15 +224,22 @@ impl<'a> Shader<'a> {
                 _ => (true, interiors.top().map_or(1.0, |t| t.1) / m.ior),
             };
             if (eta - 1.0).abs() < 1e-10 {
-                // Straight through: the trace level is not used up.
+                // Straight through: the trace level is not used up, for the first
+                // MAX_PASS_THROUGH such surfaces of the path.
                 let mut inner = *interiors;
                 if entering {
                     inner.push(id, m.ior)
                 } else {
                     inner.pop()
                 }
+                let next = if inner.passes < MAX_PASS_THROUGH {
+                    inner.passes += 1;
+                    level
+                } else {
+                    level + 1
+                };
                 let (r, tmin) = self.spawn.ray(p, err, n_geo, ray.d);
-                c += fil * self.trace(&r, tmin, level, w, &mut inner);
+                c += fil * self.trace(&r, tmin, next, w, &mut inner);
             } else {
                 let cos_i = -d.dot(n);
                 let eta_r = eta as Real;
