@@ -24,6 +24,10 @@ pub enum TransformError {
     /// An entry is NaN or infinite.
     #[error("the transform has a non-finite entry")]
     NonFinite,
+    /// The transform's numbers are too large: its determinant, or an entry once converted to
+    /// the render precision, overflows.
+    #[error("the transform overflows: {0}")]
+    Overflow(String),
     /// The determinant is zero or the matrix is too ill-conditioned to invert.
     #[error("the transform is singular (determinant {det:e}{})", if cond.is_finite() { format!(", condition number {cond:e}") } else { String::new() })]
     Singular {
@@ -93,6 +97,13 @@ impl Affine64 {
             return Err(TransformError::NonFinite);
         }
         let det = self.m.determinant();
+        if det.is_infinite() {
+            return Err(TransformError::Overflow(
+                "its scale is too large (the determinant exceeds the largest f64); \
+scale the scene down"
+                    .into(),
+            ));
+        }
         let inv = match inverse_gepp(&self.m) {
             Some(inv) if det != 0.0 => inv,
             _ => DMat3::from_cols_array(&[f64::NAN; 9]),
@@ -181,6 +192,18 @@ impl Transform {
             inv: to_real(&inv.m),
             inv_d: crate::real::vec3(inv.d),
         };
+        if !(t.m.is_finite() && t.d.is_finite()) || !t.m.determinant().is_finite() {
+            return Err(TransformError::Overflow(format!(
+                "its {} is too large for the renderer's precision ({}); scale the scene down, \
+or use the f64 build",
+                if t.d.is_finite() {
+                    "scale"
+                } else {
+                    "translation"
+                },
+                crate::real::PRECISION
+            )));
+        }
         let finite = t.m.is_finite() && t.d.is_finite() && t.inv.is_finite() && t.inv_d.is_finite();
         let real_det = t.m.determinant();
         if !finite || real_det == 0.0 || !real_det.is_finite() {

@@ -262,3 +262,107 @@ fn test13_cli_reports_and_writes_nothing() {
     assert!(String::from_utf8_lossy(&run.stderr).contains("unknown output format"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn test20_arrays_of_the_wrong_length_are_refused_not_truncated() {
+    let obj = |extra: &str| format!("{CAMERA}\n[[objects]]\ntype = \"sphere\"\n{extra}\n");
+    check(
+        &obj("transform = [{ translate = [1, 0, 0, 99] }]"),
+        15,
+        "objects[0].transform[0].translate",
+        "invalid length 4, expected an array of 3 elements",
+    );
+    check(
+        &obj("transform = [{ matrix = [[1,0,0],[0,1,0],[0,0,1],[0,0,0],[9,9,9]] }]"),
+        15,
+        "objects[0].transform[0].matrix",
+        "invalid length 5, expected an array of 4 elements",
+    );
+    check(
+        &format!("{CAMERA}[[lights]]\nposition = [0, 1, 0]\ncolor = [1, 1, 1, \"x\"]\n"),
+        14,
+        "lights[0].color",
+        "invalid length 4",
+    );
+    check(
+        &format!("{CAMERA}\n[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]\n"),
+        15,
+        "objects[0].vertices",
+        "invalid length 4",
+    );
+    check(
+        &CAMERA.replace("vrp = [0, 0, 0]", "vrp = [0, 0]"),
+        3,
+        "camera.view.vrp",
+        "invalid length 2",
+    );
+}
+
+#[test]
+fn test21_numbers_beyond_the_render_precision_are_refused_where_they_are_written() {
+    if cfg!(feature = "f64") {
+        // 1e39 is an ordinary number in f64: the scene loads.
+        load(&CAMERA.replace("vrp = [0, 0, 0]", "vrp = [1e39, 0, 0]")).unwrap();
+        return;
+    }
+    for (text, line, field) in [
+        (CAMERA.replace("vrp = [0, 0, 0]", "vrp = [1e39, 0, 0]"), 3, "camera.view.vrp[0]"),
+        (CAMERA.replace("left = -1", "left = -1e39"), 7, "camera.view.window.left"),
+        (format!("{CAMERA}background = [0, 1e39, 0]\n"), 12, "render.background[1]"),
+        (format!("{CAMERA}[[lights]]\nposition = [0, 1, 0]\ncolor = [1, 1, 4e38]\n"), 14, "lights[0].color[2]"),
+        (format!("{CAMERA}[materials.m]\nphong_size = 1e40\n"), 13, "materials.m.phong_size"),
+        (format!("{CAMERA}\n[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1e39, 0, 0], [0, 1, 0]]\n"), 15, "objects[0].vertices[1][0]"),
+    ] {
+        check(&text, line, field, "beyond the largest number of the renderer's precision");
+    }
+    // Finite vertices whose normal (a cross product) overflows.
+    check(
+        &format!("{CAMERA}\n[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [1e20, 0, 0], [0, 1e20, 0]]\n"),
+        15,
+        "objects[0].vertices",
+        "the triangle's normal overflows",
+    );
+}
+
+#[test]
+fn test22_filter_and_transmit_together_may_not_exceed_one() {
+    check(
+        &format!("{CAMERA}[materials.m]\nfilter = 0.7\ntransmit = 0.5\n"),
+        14,
+        "materials.m.transmit",
+        "filter + transmit = 1.2 is more than 1",
+    );
+    load(&format!(
+        "{CAMERA}[materials.m]\nfilter = 0.5\ntransmit = 0.5\n"
+    ))
+    .unwrap();
+}
+
+#[test]
+fn test23_a_transform_too_large_is_reported_as_an_overflow() {
+    let obj = |t: &str| format!("{CAMERA}\n[[objects]]\ntype = \"sphere\"\ntransform = [{t}]\n");
+    for t in [
+        "{ scale = 1e30 }, { scale = 1e30 }",
+        "{ scale = 1e200 }, { scale = 1e200 }",
+    ] {
+        let e = load(&obj(t)).expect_err(t);
+        assert!(
+            e.message.contains("overflow") || e.message.contains("beyond the largest number"),
+            "{t}: {e}"
+        );
+        assert!(
+            !e.message.contains("singular"),
+            "{t}: an overflow reported as singular: {e}"
+        );
+    }
+}
+
+#[test]
+fn test24_a_mesh_that_is_not_a_regular_file_is_refused() {
+    let e = load(&format!(
+        "{CAMERA}\n[[objects]]\ntype = \"mesh\"\nfile = \"/dev/zero\"\n"
+    ))
+    .expect_err("/dev/zero is not a mesh");
+    assert!(e.message.contains("not a regular file"), "{e}");
+    assert_eq!(e.field, "objects[0].file");
+}

@@ -22,7 +22,7 @@ use std::sync::Arc;
 use toml::Spanned;
 
 fn dv(v: V3) -> DVec3 {
-    DVec3::from_array(v)
+    DVec3::from_array(v.0)
 }
 
 fn color(v: V3) -> Color {
@@ -110,6 +110,7 @@ pub fn build_with(
     overrides: &Overrides,
 ) -> Result<Scene, SceneError> {
     let src = Source::new(file, text);
+    check_precision(text, &src)?;
     let mut desc = format::parse(text).map_err(|(span, path, msg)| {
         let field = if path.is_empty() || path == "." {
             "(syntax)".to_string()
@@ -272,6 +273,16 @@ it bounds the recursion of the classic model and the length of a path",
                 return Err(err(key, "must be finite and ≥ 0"));
             }
         }
+        if d.filter + d.transmit > 1.0 {
+            return Err(err(
+                "transmit",
+                &format!(
+                    "filter + transmit = {} is more than 1: more light would pass through \
+than arrives, and the surface's own colour would count negatively",
+                    d.filter + d.transmit
+                ),
+            ));
+        }
         if d.color.iter().any(|x| !x.is_finite() || *x < 0.0) {
             return Err(err("color", "components must be finite and ≥ 0"));
         }
@@ -291,7 +302,7 @@ it bounds the recursion of the classic model and the length of a path",
                 },
             ));
         }
-        let radiance = d.radiance.unwrap_or([0.0; 3]);
+        let radiance = d.radiance.unwrap_or_default();
         if radiance.iter().any(|x| !x.is_finite() || *x < 0.0) {
             return Err(err("radiance", "components must be finite and ≥ 0"));
         }
@@ -383,6 +394,77 @@ it bounds the recursion of the classic model and the length of a path",
         area_lights,
         area_light_of,
     })
+}
+
+/// Refuses numbers that are finite as written (in f64) but not in the renderer's precision
+/// (|x| above `Real::MAX`, 3.4e38 in the f32 build): converted, they would become
+/// infinite and the image would come out black or with zeroed pixels, silently. Integers
+/// too large for an f64 are left to the typed fields, which refuse them.
+fn check_precision(text: &str, src: &Source) -> Result<(), SceneError> {
+    use toml::de::{DeTable, DeValue};
+    let Ok(table) = DeTable::parse(text) else {
+        return Ok(()); // Syntax errors are reported, located, by the typed parse.
+    };
+    fn number(v: &DeValue) -> Option<f64> {
+        match v {
+            DeValue::Float(f) => f.as_str().replace('_', "").parse().ok(),
+            DeValue::Integer(i) => {
+                let digits = i.as_str().replace('_', "");
+                let (neg, body) = match digits.strip_prefix('-') {
+                    Some(b) => (true, b.to_string()),
+                    None => (false, digits.trim_start_matches('+').to_string()),
+                };
+                let body = body
+                    .trim_start_matches("0x")
+                    .trim_start_matches("0o")
+                    .trim_start_matches("0b");
+                let v = i64::from_str_radix(body, i.radix()).ok()? as f64;
+                Some(if neg { -v } else { v })
+            }
+            _ => None,
+        }
+    }
+    fn walk(v: &toml::Spanned<DeValue>, path: &str, src: &Source) -> Result<(), SceneError> {
+        match v.get_ref() {
+            DeValue::Table(t) => {
+                for (k, val) in t.iter() {
+                    let key = k.get_ref();
+                    let p = if path.is_empty() {
+                        key.to_string()
+                    } else {
+                        format!("{path}.{key}")
+                    };
+                    walk(val, &p, src)?;
+                }
+            }
+            DeValue::Array(a) => {
+                for (i, val) in a.iter().enumerate() {
+                    walk(val, &format!("{path}[{i}]"), src)?;
+                }
+            }
+            other => {
+                if let Some(x) = number(other) {
+                    if x.is_finite() && x.abs() > Real::MAX as f64 {
+                        return Err(src.error(
+                            v.span().start,
+                            path.to_string(),
+                            format!(
+                                "{x:e} is beyond the largest number of the renderer's precision \
+({}, largest {:e}); scale the scene down, or use the f64 build",
+                                crate::real::PRECISION,
+                                Real::MAX
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+    for (k, val) in table.get_ref().iter() {
+        walk(val, k.get_ref(), src)?;
+    }
+    Ok(())
 }
 
 /// How deep definitions may place one another (`defs.a` placing `defs.b` placing …), and
@@ -772,7 +854,19 @@ impl Builder<'_> {
                         .uvs
                         .map(|u| u.map(|q| Vec2::new(q[0] as Real, q[1] as Real))),
                 };
-                if !(tri.normal().length_squared() > 0.0) {
+                let n = tri.normal();
+                if !(n.is_finite() && n.length_squared().is_finite()) {
+                    return Err(self.src.error(
+                        v.span().start,
+                        format!("{path}.vertices"),
+                        format!(
+                            "the triangle's normal overflows the renderer's precision ({}): \
+its vertices are too large; scale the object down, or use the f64 build",
+                            crate::real::PRECISION
+                        ),
+                    ));
+                }
+                if !(n.length_squared() > 0.0) {
                     return Err(self.src.error(
                         v.span().start,
                         format!("{path}.vertices"),

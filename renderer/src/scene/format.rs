@@ -6,7 +6,60 @@ use std::collections::BTreeMap;
 use toml::Spanned;
 
 /// A 3-vector in the file.
-pub type V3 = [f64; 3];
+pub type V3 = Exact<f64, 3>;
+
+/// A TOML array of exactly `N` elements. serde's fixed-size arrays read the first `N`
+/// elements and ignore the rest; this refuses an array of any other length, so
+/// `translate = [1, 0, 0, 99]` is an error, not a translation by (1, 0, 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Exact<T, const N: usize>(pub [T; N]);
+
+impl<T: Copy + Default, const N: usize> Default for Exact<T, N> {
+    fn default() -> Self {
+        Exact([T::default(); N])
+    }
+}
+
+impl<T, const N: usize> std::ops::Deref for Exact<T, N> {
+    type Target = [T; N];
+    fn deref(&self) -> &[T; N] {
+        &self.0
+    }
+}
+
+impl<'de, T: Deserialize<'de> + Copy + Default, const N: usize> Deserialize<'de> for Exact<T, N> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visit<T, const N: usize>(std::marker::PhantomData<T>);
+        impl<'de, T: Deserialize<'de> + Copy + Default, const N: usize> serde::de::Visitor<'de>
+            for Visit<T, N>
+        {
+            type Value = Exact<T, N>;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                write!(f, "an array of {N} elements")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<Self::Value, A::Error> {
+                let mut out = [T::default(); N];
+                for (k, slot) in out.iter_mut().enumerate() {
+                    *slot = seq
+                        .next_element()?
+                        .ok_or_else(|| serde::de::Error::invalid_length(k, &self))?;
+                }
+                let mut extra = 0;
+                while seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+                    extra += 1;
+                }
+                if extra > 0 {
+                    return Err(serde::de::Error::invalid_length(N + extra, &self));
+                }
+                Ok(Exact(out))
+            }
+        }
+        d.deserialize_seq(Visit::<T, N>(std::marker::PhantomData))
+    }
+}
 
 /// The whole file.
 #[derive(Debug, Deserialize)]
@@ -136,7 +189,7 @@ fn adc() -> f64 {
     1.0 / 255.0
 }
 fn white() -> V3 {
-    [1.0; 3]
+    Exact([1.0; 3])
 }
 
 /// A light.
@@ -272,11 +325,11 @@ pub struct NodeDesc {
     /// Cylinder and cone: whether the ends are closed (default true).
     pub capped: Option<bool>,
     /// Triangle: vertices.
-    pub vertices: Option<Spanned<[V3; 3]>>,
+    pub vertices: Option<Spanned<Exact<V3, 3>>>,
     /// Triangle: per-vertex shading normals.
-    pub normals: Option<Spanned<[V3; 3]>>,
+    pub normals: Option<Spanned<Exact<V3, 3>>>,
     /// Triangle: per-vertex uv.
-    pub uvs: Option<[[f64; 2]; 3]>,
+    pub uvs: Option<Exact<Exact<f64, 2>, 3>>,
     /// Mesh: OBJ file, relative to the scene file.
     pub file: Option<Spanned<String>>,
     /// Instance: the definition's name.
@@ -304,7 +357,7 @@ pub enum TransformOp {
     Shear(ShearDesc),
     /// Full affine matrix: four rows of three, row-vector convention (POV-Ray's
     /// `matrix`): `p' = p·M + row4`.
-    Matrix([V3; 4]),
+    Matrix(Exact<V3, 4>),
 }
 
 /// A uniform or per-axis scale.

@@ -53,6 +53,9 @@ pub enum MeshError {
     Obj(String),
 }
 
+/// The largest OBJ file a scene may name: 4 GiB (about 80 million triangles).
+pub const MAX_OBJ_BYTES: u64 = 4 << 30;
+
 impl Mesh {
     /// Validates the arrays and builds the BVH. Degenerate (zero-area) triangles are kept:
     /// the watertight test never reports a hit on them.
@@ -116,6 +119,20 @@ impl Mesh {
 
     /// Loads a Wavefront OBJ file (all its models merged, triangulated).
     pub fn load_obj(path: &std::path::Path) -> Result<Self, MeshError> {
+        // Only a regular file of bounded size: a device or a pipe (/dev/zero) would be read
+        // without end.
+        let meta = std::fs::metadata(path).map_err(|e| MeshError::Obj(e.to_string()))?;
+        if !meta.is_file() {
+            return Err(MeshError::Obj(
+                "not a regular file (a mesh must be an OBJ file on disk)".into(),
+            ));
+        }
+        if meta.len() > MAX_OBJ_BYTES {
+            return Err(MeshError::Obj(format!(
+                "{} bytes is more than the limit of {MAX_OBJ_BYTES} (4 GiB)",
+                meta.len()
+            )));
+        }
         let opts = tobj::LoadOptions {
             single_index: true,
             triangulate: true,
