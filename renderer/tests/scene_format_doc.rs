@@ -54,8 +54,23 @@ fn rename_rule(attrs: &str) -> Option<&'static str> {
     } else if attrs.contains("rename_all = \"lowercase\"") {
         Some("lower")
     } else {
+        assert!(
+            !attrs.contains("rename_all"),
+            "renderer/tests/scene_format_doc.rs does not know the rename_all rule in {attrs:?}: \
+teach rename_rule and apply about it"
+        );
         None
     }
+}
+
+/// Every `alias = "..."` in a field's attributes: other spellings the parser accepts.
+fn aliases(attrs: &str) -> Vec<String> {
+    attrs
+        .split("alias = \"")
+        .skip(1)
+        .filter_map(|s| s.split('"').next())
+        .map(str::to_string)
+        .collect()
 }
 
 fn apply(rule: Option<&str>, name: &str) -> String {
@@ -137,11 +152,23 @@ fn fields(body: &[String], indent: usize, rule: Option<&str>) -> Vec<Key> {
         }
         let rest = rest.trim_start_matches("pub ");
         if let Some((name, ty)) = rest.split_once(": ") {
+            assert!(
+                !attrs.contains("flatten"),
+                "renderer/src/scene/format.rs: field `{name}` is #[serde(flatten)]: teach \
+renderer/tests/scene_format_doc.rs to read the flattened type's keys into this section"
+            );
             if !attrs.contains("serde(skip") {
+                let ty = ty.trim_end_matches(',').to_string();
                 keys.push(Key {
                     name: explicit_rename(&attrs).unwrap_or_else(|| apply(rule, name)),
-                    ty: ty.trim_end_matches(',').to_string(),
+                    ty: ty.clone(),
                 });
+                for a in aliases(&attrs) {
+                    keys.push(Key {
+                        name: a,
+                        ty: ty.clone(),
+                    });
+                }
             }
         }
         attrs.clear();
@@ -153,10 +180,14 @@ fn fields(body: &[String], indent: usize, rule: Option<&str>) -> Vec<Key> {
 fn variants(body: &[String], rule: Option<&str>) -> Vec<(String, String, Vec<String>)> {
     let mut out = Vec::new();
     let mut i = 0;
+    let mut attrs = String::new();
     while i < body.len() {
         let l = &body[i];
         let t = l.trim_start();
         let depth = l.len() - t.len();
+        if depth == 4 && t.starts_with("#[") {
+            attrs.push_str(t);
+        }
         if depth == 4 && t.chars().next().is_some_and(|c| c.is_uppercase()) {
             let raw: String = t.chars().take_while(|c| c.is_alphanumeric()).collect();
             let mut inner = Vec::new();
@@ -167,7 +198,12 @@ fn variants(body: &[String], rule: Option<&str>) -> Vec<(String, String, Vec<Str
                     i += 1;
                 }
             }
-            out.push((apply(rule, &raw), raw, inner));
+            let toml = explicit_rename(&attrs).unwrap_or_else(|| apply(rule, &raw));
+            for a in aliases(&attrs) {
+                out.push((a, raw.clone(), Vec::new()));
+            }
+            out.push((toml, raw, inner));
+            attrs.clear();
         }
         i += 1;
     }
