@@ -235,18 +235,18 @@ fn far_sphere_t_error_and_silhouette() {
 /// The side of a quadric as the roots of Σ wᵢ·(o − c)ᵢ·… = 0 for a diagonal form `w`
 /// about the point `c`, limited to −1 ≤ y ≤ 1: the near root, in f64, computed without
 /// cancellation (l = o − d·(b/a), as in the shapes).
-fn side_reference(w: DVec3, c: DVec3, o: DVec3, d: DVec3) -> Option<f64> {
+fn side_reference(w: DVec3, k: f64, c: DVec3, o: DVec3, d: DVec3) -> Option<f64> {
     let o = o - c;
     let q = |u: DVec3, v: DVec3| (w * u * v).element_sum();
     let (a, b) = (q(d, d), q(o, d));
     let l = o - d * (b / a);
-    let disc = -a * q(l, l);
+    let disc = -a * (q(l, l) - k);
     if disc < 0.0 {
         return None;
     }
-    let k = -(b + disc.sqrt().copysign(b));
-    let c0 = q(o, o);
-    let (t0, t1) = ((k / a).min(c0 / k), (k / a).max(c0 / k));
+    let h = -(b + disc.sqrt().copysign(b));
+    let c0 = q(o, o) - k;
+    let (t0, t1) = ((h / a).min(c0 / h), (h / a).max(c0 / h));
     [t0, t1]
         .into_iter()
         .find(|&t| t > 0.0 && ((o + c).y + t * d.y).abs() <= 1.0)
@@ -268,7 +268,8 @@ fn far_side(
     let mut errs = Vec::new();
     for i in 0..20_000 {
         let az = rng.range(0.0, TAU);
-        let view = DVec3::new(az.cos(), rng.range(-0.2, 0.2), az.sin()).normalize();
+        // The eye within 0.5 of the xz plane, so the capped shapes show only their side.
+        let view = DVec3::new(az.cos(), rng.range(-0.5, 0.5) / dist, az.sin()).normalize();
         // A point on the side whose outward normal faces the eye.
         let y = rng.range(-0.9, 0.9);
         let phi = az + rng.range(-1.3, 1.3);
@@ -278,7 +279,10 @@ fn far_side(
         let what =
             format!("{shape:?} D = {dist:e} ray #{i} o={o:?} d={d:?} (renderer/src/shapes/)");
         let got = shape.intersect(&r, 0.0, INF);
-        match (got, side_reference(w, c, o, d)) {
+        match (
+            got,
+            side_reference(w, if c == DVec3::ZERO { 1.0 } else { 0.0 }, c, o, d),
+        ) {
             (Some(h), Some(t)) => {
                 assert_finite(&h);
                 errs.push((h.t as f64 - t).abs() / ulp32(t));
@@ -301,7 +305,8 @@ fn far_side(
 #[test]
 fn far_cylinder_and_cone_sides_t_error() {
     // t error in f32 ulps against the f64 closed form, at distance/size 1e1 to 1e5.
-    // Bound 8 ulps in f32 (as for the sphere); in f64 1e-3 f32 ulps (agreement only).
+    // Bound 8 ulps in f32 (as for the sphere), measured 3.3 (median 0.26–0.51); in f64
+    // 1e-3 f32 ulps (agreement only). Wrong hit/miss: 0.
     let max_ulps = if F64 { 1e-3 } else { 8.0 };
     // Cylinder: x² + z² = 1. Cone: x² + z² = ((1 − y)/2)², i.e. x² + z² − (y − 1)²/4 = 0.
     let cases: [(Shape, DVec3, DVec3, fn(f64) -> f64); 4] = [
