@@ -110,8 +110,15 @@ pub fn build_with(
     overrides: &Overrides,
 ) -> Result<Scene, SceneError> {
     let src = Source::new(file, text);
-    check_precision(text, &src)?;
-    let mut desc = format::parse(text).map_err(|(span, path, msg)| {
+    let table = toml::de::DeTable::parse(text).map_err(|e| {
+        src.error(
+            e.span().map_or(0, |s| s.start),
+            "(syntax)",
+            e.message().to_string(),
+        )
+    })?;
+    check_precision(&table, &src)?;
+    let mut desc = format::parse_table(table).map_err(|(span, path, msg)| {
         let field = if path.is_empty() || path == "." {
             "(syntax)".to_string()
         } else {
@@ -400,46 +407,62 @@ than arrives, and the surface's own colour would count negatively",
 /// (|x| above `Real::MAX`, 3.4e38 in the f32 build): converted, they would become
 /// infinite and the image would come out black or with zeroed pixels, silently. Integers
 /// too large for an f64 are left to the typed fields, which refuse them.
-fn check_precision(text: &str, src: &Source) -> Result<(), SceneError> {
-    use toml::de::{DeTable, DeValue};
-    let Ok(table) = DeTable::parse(text) else {
-        return Ok(()); // Syntax errors are reported, located, by the typed parse.
-    };
+fn check_precision(
+    table: &toml::Spanned<toml::de::DeTable<'_>>,
+    src: &Source,
+) -> Result<(), SceneError> {
+    use toml::de::DeValue;
+    /// A number's value, read only when it could be out of range: its digits (before an
+    /// exponent) or its exponent are long. Most numbers of a scene are short and skipped.
     fn number(v: &DeValue) -> Option<f64> {
-        match v {
-            DeValue::Float(f) => f.as_str().replace('_', "").parse().ok(),
-            DeValue::Integer(i) => {
-                let digits = i.as_str().replace('_', "");
-                let (neg, body) = match digits.strip_prefix('-') {
-                    Some(b) => (true, b.to_string()),
-                    None => (false, digits.trim_start_matches('+').to_string()),
-                };
-                let body = body
-                    .trim_start_matches("0x")
-                    .trim_start_matches("0o")
-                    .trim_start_matches("0b");
-                let v = i64::from_str_radix(body, i.radix()).ok()? as f64;
-                Some(if neg { -v } else { v })
-            }
-            _ => None,
+        let text = match v {
+            DeValue::Float(f) => f.as_str(),
+            DeValue::Integer(i) if i.radix() == 10 => i.as_str(),
+            _ => return None,
+        };
+        // |x| ≤ 3.4e38 whenever the mantissa has at most 38 digits and there is no
+        // exponent: skip those without parsing.
+        if text.len() < 38 && !text.contains(['e', 'E']) {
+            return None;
         }
+        text.replace('_', "").parse().ok()
     }
-    fn walk(v: &toml::Spanned<DeValue>, path: &str, src: &Source) -> Result<(), SceneError> {
+    enum Seg<'k> {
+        Key(&'k str),
+        Index(usize),
+    }
+    fn path_of(segs: &[Seg]) -> String {
+        let mut p = String::new();
+        for s in segs {
+            match s {
+                Seg::Key(k) if p.is_empty() => p.push_str(k),
+                Seg::Key(k) => {
+                    p.push('.');
+                    p.push_str(k)
+                }
+                Seg::Index(i) => p.push_str(&format!("[{i}]")),
+            }
+        }
+        p
+    }
+    fn walk<'k>(
+        v: &'k toml::Spanned<DeValue<'k>>,
+        segs: &mut Vec<Seg<'k>>,
+        src: &Source,
+    ) -> Result<(), SceneError> {
         match v.get_ref() {
             DeValue::Table(t) => {
                 for (k, val) in t.iter() {
-                    let key = k.get_ref();
-                    let p = if path.is_empty() {
-                        key.to_string()
-                    } else {
-                        format!("{path}.{key}")
-                    };
-                    walk(val, &p, src)?;
+                    segs.push(Seg::Key(k.get_ref()));
+                    walk(val, segs, src)?;
+                    segs.pop();
                 }
             }
             DeValue::Array(a) => {
                 for (i, val) in a.iter().enumerate() {
-                    walk(val, &format!("{path}[{i}]"), src)?;
+                    segs.push(Seg::Index(i));
+                    walk(val, segs, src)?;
+                    segs.pop();
                 }
             }
             other => {
@@ -447,7 +470,7 @@ fn check_precision(text: &str, src: &Source) -> Result<(), SceneError> {
                     if x.is_finite() && x.abs() > Real::MAX as f64 {
                         return Err(src.error(
                             v.span().start,
-                            path.to_string(),
+                            path_of(segs),
                             format!(
                                 "{x:e} is beyond the largest number of the renderer's precision \
 ({}, largest {:e}); scale the scene down, or use the f64 build",
@@ -461,8 +484,11 @@ fn check_precision(text: &str, src: &Source) -> Result<(), SceneError> {
         }
         Ok(())
     }
+    let mut segs = Vec::new();
     for (k, val) in table.get_ref().iter() {
-        walk(val, k.get_ref(), src)?;
+        segs.push(Seg::Key(k.get_ref()));
+        walk(val, &mut segs, src)?;
+        segs.pop();
     }
     Ok(())
 }

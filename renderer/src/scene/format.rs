@@ -396,8 +396,17 @@ pub struct ShearDesc {
 
 /// Parses scene text; on failure returns the byte span and the field path.
 pub fn parse(text: &str) -> Result<SceneDesc, (Option<std::ops::Range<usize>>, String, String)> {
-    let de = toml::Deserializer::parse(text)
+    let table = toml::de::DeTable::parse(text)
         .map_err(|e| (e.span(), String::new(), e.message().to_string()))?;
+    parse_table(table)
+}
+
+/// [`parse`] from a document already parsed into TOML values (with their spans), so a
+/// caller that inspects the values first parses the text once.
+pub fn parse_table(
+    table: toml::Spanned<toml::de::DeTable<'_>>,
+) -> Result<SceneDesc, (Option<std::ops::Range<usize>>, String, String)> {
+    let de = toml::Deserializer::from(table);
     serde_path_to_error::deserialize(de).map_err(|e| {
         // `Spanned<T>` appears in the path as a private wrapper field; drop it.
         let path = e
