@@ -6,7 +6,7 @@
 #
 #   scripts/fuzz.sh [SECONDS] [SEED] [RENDER_EVERY]
 #       default 600 seconds, seed 1, one input in 16 rendered (0: parse + build only,
-#       the fastest mode). Built with --release: several times more inputs a second.
+#       the fastest mode). Built with --release.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 case "${1:-}" in -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0;; esac
