@@ -6,7 +6,9 @@
 //! too; the input being run is kept on disk, and the failure names it.
 //!
 //! `FUZZ_SECONDS` sets the duration (default 20; CI runs 60, `scripts/fuzz.sh` longer) and
-//! `FUZZ_SEED` the seed. The worker prints how many inputs it ran.
+//! `FUZZ_SEED` the seed, `FUZZ_RENDER_EVERY` how often an input is rendered (default 16;
+//! 0 = parse + build only, the fastest mode for long runs). The worker prints how many
+//! inputs it ran.
 
 use renderer::scene::build::{build_with, Overrides};
 use std::panic::AssertUnwindSafe;
@@ -160,7 +162,7 @@ fn mutate(text: &str, rng: &mut Rng) -> String {
 
 /// The worker: fuzzes until the deadline, writing each input to `current` before running
 /// it; exits 1 on a caught panic (the input stays in `current`).
-fn work(seconds: f64, seed: u64, current: &Path) {
+fn work(seconds: f64, seed: u64, render_every: usize, current: &Path) {
     let corpus = corpus();
     let mut rng = Rng(seed);
     let deadline = Instant::now() + Duration::from_secs_f64(seconds);
@@ -175,7 +177,7 @@ fn work(seconds: f64, seed: u64, current: &Path) {
             let (path, text) = &corpus[rng.below(corpus.len())];
             let input = mutate(text, &mut rng);
             std::fs::write(current, format!("# from {}\n{input}", path.display())).unwrap();
-            let render = rng.below(16) == 0;
+            let render = render_every > 0 && rng.below(render_every) == 0;
             let base = path.parent().unwrap();
             let r = std::panic::catch_unwind(AssertUnwindSafe(|| {
                 if let Ok(scene) = build_with(&input, path, base, &tiny) {
@@ -209,9 +211,14 @@ fn fuzz_worker() {
         std::env::var("FUZZ_WORKER_SEED"),
         std::env::var("FUZZ_WORKER_INPUT"),
     ) {
+        let render_every = std::env::var("FUZZ_WORKER_RENDER_EVERY")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(16);
         work(
             secs.parse().unwrap(),
             seed.parse().unwrap(),
+            render_every,
             Path::new(&current),
         );
     }
@@ -227,6 +234,12 @@ fn test01_no_mutated_scene_panics_aborts_or_hangs() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(1);
+    // One input in FUZZ_RENDER_EVERY is rendered (default 16); 0 renders none, the fastest
+    // mode (parse + build only) for long runs.
+    let render_every: usize = std::env::var("FUZZ_RENDER_EVERY")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(16);
     let dir = std::env::temp_dir().join(format!("renderer-fuzz-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let current = dir.join("current.toml");
@@ -235,6 +248,7 @@ fn test01_no_mutated_scene_panics_aborts_or_hangs() {
         .args(["--exact", "fuzz_worker", "--nocapture", "--test-threads=1"])
         .env("FUZZ_WORKER_SECONDS", seconds.to_string())
         .env("FUZZ_WORKER_SEED", seed.to_string())
+        .env("FUZZ_WORKER_RENDER_EVERY", render_every.to_string())
         .env("FUZZ_WORKER_INPUT", &current)
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
@@ -267,7 +281,7 @@ fn test01_no_mutated_scene_panics_aborts_or_hangs() {
     );
     let runs = runs.unwrap();
     eprintln!(
-        "fuzz: {runs} inputs in {:.1} s ({:.0}/s), seed {seed}",
+        "fuzz: {runs} inputs in {:.1} s ({:.0}/s), seed {seed}, one in {render_every} rendered",
         t0.elapsed().as_secs_f64(),
         runs as f64 / t0.elapsed().as_secs_f64()
     );
