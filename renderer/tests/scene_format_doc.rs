@@ -749,8 +749,10 @@ fn check(doc: &str, keys: &[Key]) -> Vec<String> {
     for k in keys {
         let table = if k.table.is_empty() {
             "the top level".to_string()
+        } else if let Some(array) = k.table.strip_suffix("[]") {
+            format!("TOML table `[[{array}]]`")
         } else {
-            format!("TOML table `{}`", k.table)
+            format!("TOML table `[{}]`", k.table)
         };
         let what = format!("key `{}` of {table} ({} in the source)", k.key, k.owner);
         let Some(heading) = sections.get(k.owner.as_str()) else {
@@ -889,8 +891,8 @@ fn test03_a_missing_row_or_value_fails_naming_key_and_table() {
     };
     let p = check(&without("| `rr_depth` |"), &keys);
     assert!(
-        p.len() == 1 && p[0].contains("`rr_depth`") && p[0].contains("`render`") && p[0].contains("RenderDesc"),
-        "removing the rr_depth row should give one problem naming `rr_depth`, table `render` and RenderDesc, got {p:#?}"
+        p.len() == 1 && p[0].contains("`rr_depth`") && p[0].contains("`[render]`") && p[0].contains("RenderDesc"),
+        "removing the rr_depth row should give one problem naming `rr_depth`, table `[render]` and RenderDesc, got {p:#?}"
     );
     let p = check(&DOC.replace("\"sobol\"", "\"halton\""), &keys);
     assert!(
