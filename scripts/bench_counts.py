@@ -45,6 +45,14 @@ def main():
     except FileNotFoundError:
         base = {"limit_percent": 3.0, "counts": {}}
     limit = float(base.get("limit_percent", 3.0))
+    # Counts are stable on one toolchain, and move by a few percent between compilers, so
+    # a mismatch is said on every run and in the failure message.
+    base_tc, tc = base.get("toolchain"), toolchain()
+    tc_note = ""
+    if base_tc and base_tc != tc:
+        tc_note = (f"the baseline was taken with {base_tc} and this run used {tc}: counts differ between compilers; "
+                   f"compare with the baseline's toolchain (rustup toolchain install {base_tc.split()[1]}, "
+                   f"then RUSTUP_TOOLCHAIN={base_tc.split()[1]} scripts/bench-counts.sh) or accept on purpose")
     old = base.get("counts", {})
     rows, bad = [], []
     for name in sorted(set(now) | set(old)):
@@ -64,8 +72,9 @@ def main():
             bad.append(f"{name}: {a:,} -> {b:,} instructions ({change:+.2f} %, limit +{limit:g} %)")
         rows.append((name, a, b, change, verdict))
     when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
-    md = [f"Instruction counts (Callgrind `Ir`), measured {when} with {toolchain()} by `scripts/bench-counts.sh`, "
-          f"against renderer/benches/baseline.json (limit +{limit:g} %).", "",
+    md = [f"Instruction counts (Callgrind `Ir`), measured {when} with {tc} by `scripts/bench-counts.sh`, "
+          f"against renderer/benches/baseline.json (limit +{limit:g} %)."
+          + (f" **Toolchain differs:** {tc_note}." if tc_note else ""), "",
           "| benchmark | baseline | now | change | verdict |", "|---|---:|---:|---:|---|"]
     for name, a, b, ch, v in rows:
         md.append(f"| {name} | {'—' if a is None else f'{a:,}'} | {'—' if b is None else f'{b:,}'} | "
@@ -73,22 +82,26 @@ def main():
     table = "\n".join(md) + "\n"
     print(table)
     open(f"{outdir}/bench.md", "w").write(table)
-    json.dump({"measured": when, "toolchain": toolchain(), "limit_percent": limit,
+    json.dump({"measured": when, "toolchain": tc, "baseline_toolchain": base_tc, "limit_percent": limit,
                "rows": [dict(zip(["name", "baseline", "now", "change_percent", "verdict"], r)) for r in rows]},
               open(f"{outdir}/bench.json", "w"), indent=1)
     if accept:
         merged = dict(old) if partial else {}
         merged.update(now)
-        json.dump({"limit_percent": limit, "toolchain": toolchain(), "counts": dict(sorted(merged.items()))},
+        json.dump({"limit_percent": limit, "toolchain": tc, "counts": dict(sorted(merged.items()))},
                   open(base_path, "w"), indent=1)
         open(base_path, "a").write("\n")
         print(f"accepted: {base_path} now holds these counts; commit it with a message that says why")
         return
     if bad:
         print("instruction-count gate FAILED:\n  " + "\n  ".join(bad), file=sys.stderr)
+        if tc_note:
+            print("NOTE: " + tc_note, file=sys.stderr)
         print("If the change is deliberate: scripts/bench-counts.sh --accept, and commit the baseline.", file=sys.stderr)
         sys.exit(1)
     print(f"instruction-count gate: {len(now)} benchmarks within +{limit:g} % of the baseline")
+    if tc_note:
+        print("NOTE: " + tc_note)
 
 
 if __name__ == "__main__":

@@ -293,21 +293,60 @@ fn mesh(dir: &Path, quick: bool) {
     println!("{json}");
 }
 
-/// Seconds per primary ray (128² pixel centres, one thread) on `agg`.
-fn per_ray(agg: &Aggregate, secs: f64) -> f64 {
+/// Seconds per primary ray of one pass of the 128² pixel centres (one thread) on `agg`.
+fn per_ray(agg: &Aggregate) -> f64 {
     let cam = common::camera();
-    common::trace_all(&cam, agg);
     let t0 = Instant::now();
-    let mut n = 0u64;
-    while t0.elapsed().as_secs_f64() < secs {
-        std::hint::black_box(common::trace_all(&cam, agg));
-        n += (common::RES * common::RES) as u64;
+    std::hint::black_box(common::trace_all(&cam, agg));
+    t0.elapsed().as_secs_f64() / (common::RES * common::RES) as f64
+}
+
+fn median(mut x: Vec<f64>) -> f64 {
+    x.sort_by(f64::total_cmp);
+    x[x.len() / 2]
+}
+
+/// Times the scenes of one family (N = 100, 10⁴, 10⁶) alternately, one pass each per
+/// round, so a slow phase of the machine falls on all of them; returns the JSON rows:
+/// median ns/ray per N, and for the largest N the median and range of the per-round
+/// ratios to N = 100.
+fn growth_family(kind: &str, scenes: &[(usize, Aggregate)], rounds: usize) -> Vec<String> {
+    let mut times = vec![Vec::new(); scenes.len()];
+    for (_, agg) in scenes {
+        per_ray(agg); // warm-up
     }
-    t0.elapsed().as_secs_f64() / n as f64
+    for _ in 0..rounds {
+        for (k, (_, agg)) in scenes.iter().enumerate() {
+            times[k].push(per_ray(agg));
+        }
+    }
+    let last = scenes.len() - 1;
+    let ratios: Vec<f64> = (0..rounds).map(|r| times[last][r] / times[0][r]).collect();
+    let (lo, hi) = ratios
+        .iter()
+        .fold((f64::INFINITY, 0f64), |(a, b), &x| (a.min(x), b.max(x)));
+    let ratio = median(ratios);
+    scenes
+        .iter()
+        .zip(times)
+        .enumerate()
+        .map(|(k, ((n, _), t))| {
+            let extra = if k == last {
+                format!(", \"ratio_to_first\": {ratio:.3}, \"ratio_min\": {lo:.3}, \"ratio_max\": {hi:.3}, \"rounds\": {rounds}")
+            } else {
+                String::new()
+            };
+            format!(
+                "{{\"kind\": \"{kind}\", \"n\": {n}, \"ns_per_ray\": {:.2}{extra}}}",
+                median(t) * 1e9
+            )
+        })
+        .collect()
 }
 
 fn growth(quick: bool) {
-    let secs = if quick { 0.2 } else { 1.0 };
+    let rounds = if quick { 5 } else { 21 };
+    let ns = [100usize, 10_000, 1_000_000];
     let mut rows = Vec::new();
     // Spheres in a layer facing the camera (the image covered the same at every N) and
     // in a cloud filling a cube (deeper for larger N).
@@ -318,29 +357,23 @@ fn growth(quick: bool) {
         ),
         ("spheres (cloud)", common::cloud),
     ] {
-        for n in [100usize, 10_000, 1_000_000] {
-            let t = per_ray(&make(n), secs);
-            rows.push(format!(
-                "{{\"kind\": \"{kind}\", \"n\": {n}, \"ns_per_ray\": {:.2}}}",
-                t * 1e9
-            ));
-        }
+        let scenes: Vec<_> = ns.iter().map(|&n| (n, make(n))).collect();
+        rows.extend(growth_family(kind, &scenes, rounds));
     }
     // UV spheres of 2·nu·nv triangles: 100, 10,000 and 1,000,000.
-    for (nu, nv) in [(10usize, 5usize), (100, 50), (1000, 500)] {
-        let agg = Aggregate::new(vec![Instance {
-            shape: Shape::Mesh(Arc::new(common::mesh(nu, nv))),
-            xf: None,
-            material: 0,
-            object_id: 1,
-        }]);
-        let t = per_ray(&agg, secs);
-        rows.push(format!(
-            "{{\"kind\": \"triangles\", \"n\": {}, \"ns_per_ray\": {:.2}}}",
-            2 * nu * nv,
-            t * 1e9
-        ));
-    }
+    let meshes: Vec<_> = [(10usize, 5usize), (100, 50), (1000, 500)]
+        .iter()
+        .map(|&(nu, nv)| {
+            let agg = Aggregate::new(vec![Instance {
+                shape: Shape::Mesh(Arc::new(common::mesh(nu, nv))),
+                xf: None,
+                material: 0,
+                object_id: 1,
+            }]);
+            (2 * nu * nv, agg)
+        })
+        .collect();
+    rows.extend(growth_family("triangles", &meshes, rounds));
     println!("{{\"growth\": [{}]}}", rows.join(", "));
 }
 

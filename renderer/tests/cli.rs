@@ -114,3 +114,43 @@ fn test03_map_accepts_minmax_and_min_max() {
         );
     }
 }
+
+#[test]
+fn test04_every_option_of_render_help_is_documented() {
+    // renderer/docs/cli.md lists every long option that `renderer render --help` prints.
+    let doc = include_str!("../docs/cli.md");
+    let o = run(&["render", "--help"]);
+    assert!(o.status.success(), "renderer render --help failed");
+    let help = String::from_utf8_lossy(&o.stdout);
+    let mut options: Vec<String> = help
+        .split(|c: char| c.is_whitespace() || c == ',' || c == '[' || c == ']')
+        .filter(|w| w.starts_with("--") && w.len() > 2)
+        .map(|w| {
+            w.split(['=', '<'])
+                .next()
+                .unwrap()
+                .trim_end_matches('.')
+                .to_string()
+        })
+        .collect();
+    options.sort();
+    options.dedup();
+    assert!(
+        options.len() >= 8,
+        "found only {options:?} in `renderer render --help`:\n{help}"
+    );
+    // The first column of the option table: one row per option.
+    let rows: Vec<&str> = doc
+        .lines()
+        .filter_map(|l| l.strip_prefix('|')?.split('|').next())
+        .collect();
+    let missing: Vec<&String> = options
+        .iter()
+        .filter(|opt| !rows.iter().any(|r| r.contains(&format!("`{opt}`"))))
+        .collect();
+    assert!(
+        missing.is_empty(),
+        "`renderer render --help` shows {missing:?}, which renderer/docs/cli.md does not \
+document: add a row to its option table (value, default, meaning)"
+    );
+}

@@ -33,6 +33,21 @@ fn temp_files(dir: &Path) -> Vec<String> {
         .collect()
 }
 
+/// After a failed write: the existing output still holds "OLD", and no temp file is left.
+#[track_caller]
+fn assert_untouched(dir: &Path, out: &Path, case: &str) {
+    assert_eq!(
+        std::fs::read(out).unwrap(),
+        b"OLD",
+        "{case}: the existing output changed"
+    );
+    assert!(
+        temp_files(dir).is_empty(),
+        "{case}: left {:?}",
+        temp_files(dir)
+    );
+}
+
 fn sh(script: &str) -> Output {
     Command::new("sh").arg("-c").arg(script).output().unwrap()
 }
@@ -64,16 +79,7 @@ fn test01_a_full_disk_fails_and_keeps_the_old_output_for_every_format() {
             text(&o)
         );
         assert!(text(&o).contains("cannot write"), "{ext}: {}", text(&o));
-        assert_eq!(
-            std::fs::read(&out).unwrap(),
-            b"OLD",
-            "{ext}: the existing output changed"
-        );
-        assert!(
-            temp_files(&dir).is_empty(),
-            "{ext}: left {:?}",
-            temp_files(&dir)
-        );
+        assert_untouched(&dir, &out, ext);
     }
 }
 
@@ -142,16 +148,7 @@ fn test03_a_signal_while_writing_removes_the_temp_file() {
         assert!(k.success());
         let o = child.wait_with_output().unwrap();
         assert!(!o.status.success(), "SIG{signal}: exited 0");
-        assert_eq!(
-            std::fs::read(&out).unwrap(),
-            b"OLD",
-            "SIG{signal}: the output changed"
-        );
-        assert!(
-            temp_files(&dir).is_empty(),
-            "SIG{signal}: left {:?}",
-            temp_files(&dir)
-        );
+        assert_untouched(&dir, &out, &format!("SIG{signal}"));
     }
 }
 

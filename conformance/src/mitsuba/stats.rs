@@ -321,4 +321,56 @@ mod tests {
         let a = sidak_alpha(48 * 36);
         assert!(p_value(4.5) > a && p_value(4.6) < a);
     }
+
+    #[test]
+    fn the_xyz_variance_comes_from_the_rgb_covariance() {
+        // One pixel with a known RGB mean and covariance: the XYZ variance of each row is
+        // row · Cov · rowᵀ.
+        let c = [0.2f64, 0.4, 0.6];
+        let cov = [
+            [0.01, 0.005, 0.001],
+            [0.005, 0.02, 0.002],
+            [0.001, 0.002, 0.03],
+        ];
+        let m = [
+            c[0] * c[0] + cov[0][0],
+            c[1] * c[1] + cov[1][1],
+            c[2] * c[2] + cov[2][2],
+            c[0] * c[1] + cov[0][1],
+            c[0] * c[2] + cov[0][2],
+            c[1] * c[2] + cov[1][2],
+        ]
+        .map(|v| v as f32);
+        let e = Estimate::from_rgb_moments((1, 1), &c.map(|v| v as f32), &m, 16);
+        for (k, row) in SRGB_TO_XYZ.iter().enumerate() {
+            let want: f64 = (0..3)
+                .flat_map(|i| (0..3).map(move |j| (i, j)))
+                .map(|(i, j)| row[i] * row[j] * cov[i][j])
+                .sum();
+            assert!(
+                (e.var[k] - want).abs() < 1e-6,
+                "row {k}: variance {} != {want}",
+                e.var[k]
+            );
+            let mean: f64 = (0..3).map(|i| row[i] * c[i]).sum();
+            assert!((e.mean[k] - mean).abs() < 1e-6);
+        }
+        assert_eq!(e.n, 16.0);
+    }
+
+    #[test]
+    fn an_edge_pixel_at_the_image_border_is_matched_by_its_neighbour() {
+        // Our first pixel's ray hit the surface the reference's second pixel hit (at the
+        // border of the image, along a row and along a column): an edge pixel, not failing.
+        for (w, h) in [(3, 1), (1, 3)] {
+            let geo = |z: [f64; 3]| Geometry {
+                size: (w, h),
+                z: z.to_vec(),
+                n: [0.0, 0.0, 1.0].repeat(3),
+                hit: vec![true; 3],
+            };
+            let t = geometry_test(&geo([2.0, 2.0, 2.0]), &geo([1.0, 2.0, 2.0]));
+            assert_eq!((t.silhouette, t.failing), (1, 0), "{w}x{h}");
+        }
+    }
 }
