@@ -4,6 +4,7 @@
 
 use glam::{DMat3, DQuat, DVec3};
 use renderer::aggregate::Shape;
+use renderer::bvh::Visit;
 use renderer::real::{dvec3, vec3};
 use renderer::shapes::{Mesh, Triangle};
 use renderer::{Affine64, Aggregate, Hit, Instance, Ray, Real, Transform, Vec3};
@@ -703,6 +704,69 @@ fn mesh_batches_match_one_ray_at_a_time() {
                 }
             }
             assert!(hits > 500, "only {hits} hits");
+        }
+    }
+}
+
+/// Boxes along the x axis at geometrically growing distances: the SAH peels the farthest
+/// ones off one level at a time, so the tree is as deep as the build allows, and a ray
+/// from the origin along +x meets every box, nearest first, with the far siblings of each
+/// level waiting on the traversal stack.
+fn geometric_row(n: usize) -> (renderer::bvh::Bvh, Vec<usize>) {
+    let boxes: Vec<renderer::aabb::Aabb> = (0..n)
+        .map(|k| {
+            let x = 1.25f64.powi(k as i32);
+            renderer::aabb::Aabb::from_points(
+                vec3(DVec3::new(x, -0.5, -0.5)),
+                vec3(DVec3::new(x * 1.05, 0.5, 0.5)),
+            )
+        })
+        .collect();
+    renderer::bvh::Bvh::build((0..n).collect(), &boxes, 1.0)
+}
+
+/// Every traversal picks a fixed-capacity stack by the tree's depth (tiny, short, long);
+/// a deep tree given a shallow tree's stack would overflow it. Rows of 8 to 300 boxes make
+/// trees from a few levels deep to the build's depth limit; the ray must visit every box,
+/// alone and in a batch.
+#[test]
+fn deep_degenerate_trees_visit_every_leaf_alone_and_in_batches() {
+    for n in [8, 30, 60, 120, 300] {
+        let (bvh, order) = geometric_row(n);
+        let ray = Ray::new(Vec3::ZERO, Vec3::X);
+        let mut seen = vec![0u32; n];
+        let hit = bvh.traverse(&ray, 0.0, INF, false, |i, _| {
+            seen[order[i as usize]] += 1;
+            Visit::Miss
+        });
+        assert!(
+            !hit,
+            "{n} boxes: nothing reported a hit, yet the walk found one"
+        );
+        assert!(
+            seen.iter().all(|&c| c == 1),
+            "{n} boxes in a row: the ray along the row visited them {seen:?} times \
+             (each exactly once expected; see Bvh::traverse_leaves in renderer/src/bvh.rs)"
+        );
+        let rays = vec![ray; renderer::bvh::BATCH];
+        let t_max = vec![INF; rays.len()];
+        let mut seen = vec![vec![0u32; n]; rays.len()];
+        bvh.traverse_batch(
+            &rays,
+            0.0,
+            &t_max,
+            |r, i, _| {
+                seen[r][order[i as usize]] += 1;
+                Visit::Miss
+            },
+            |_, _| {},
+        );
+        for (r, s) in seen.iter().enumerate() {
+            assert!(
+                s.iter().all(|&c| c == 1),
+                "{n} boxes in a row, batch ray {r}: visited {s:?} times (each exactly once \
+                 expected; see Bvh::traverse_batch_leaves in renderer/src/bvh.rs)"
+            );
         }
     }
 }
