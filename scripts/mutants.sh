@@ -81,7 +81,7 @@ else
 fi
 
 # --test-workspace=true: every mutant runs the whole gate, not only its own crate's tests.
-# -j 1: one build at a time (the machines here have two cores).
+# --in-place runs one mutant at a time (the machines here have two cores anyway).
 # --timeout: a mutant that makes the gate run past 5 minutes (an endless traversal, say)
 #   counts as caught by timeout; the unmutated gate takes about 30 s.
 cd "$src"
@@ -89,6 +89,6 @@ CARGO_TARGET_DIR="$target/mutants/build" nice -n 19 cargo mutants \
     --in-place \
     --workspace --test-workspace=true \
     --shard "$k/$n" --sharding round-robin \
-    -j 1 --timeout 300 \
+    --timeout 300 \
     "${FILES[@]}" \
     --output "$out"
