@@ -3,6 +3,7 @@
 //! record the manifest entries.
 
 use super::harness::{export_text, read_geometry, read_radiance};
+use super::stats::Geometry;
 use crate::catalog::{load, repo_root, scratch_dir, Entry};
 use crate::manifest::{sha256, today, Manifest, Record};
 use anyhow::{bail, Context, Result};
@@ -117,9 +118,10 @@ pub fn regenerate(entries: &[Entry], spp: u32) -> Result<()> {
 }
 
 /// Re-renders `entries` from scratch at the committed spp and checks the result: geometry
-/// bit for bit, radiance by the statistical test against the committed reference (Mitsuba
-/// seeds per render block, so its bits depend on the thread count). Returns the names
-/// that differ.
+/// with the same hits and distances and normals within [`GEOMETRY_ULPS`] (Embree rounds by
+/// the CPU), radiance by the statistical test against the committed reference (Mitsuba
+/// seeds per render block, so its bits depend on the thread count). Returns the names that
+/// differ.
 pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
     let version = mitsuba_version()?;
     let root = repo_root();
@@ -136,7 +138,11 @@ pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
         let committed = root.join("references/mitsuba");
         let g_new = read_geometry(&tmp.join(format!("{}.geom.exr", e.name)))?;
         let g_old = read_geometry(&committed.join(format!("{}.geom.exr", e.name)))?;
-        let same_geometry = g_new.z == g_old.z && g_new.n == g_old.n && g_new.hit == g_old.hit;
+        let diff = GeometryDiff::new(&g_new, &g_old);
+        let same_geometry = diff.within_rounding();
+        if diff.pixels > 0 {
+            eprintln!("{}", diff.describe());
+        }
         let (_, r_new) = read_radiance(&tmp.join(format!("{}.exr", e.name)), spp)?;
         let (_, r_old) = read_radiance(&committed.join(format!("{}.exr", e.name)), spp)?;
         let stat = super::stats::radiance_test(&r_new, &r_old);
@@ -151,8 +157,10 @@ pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
         eprintln!(
             "{:<24} geometry {} radiance {} (pixel pass {:.2} %, global z {:.2?}) manifest {}",
             e.name,
-            if same_geometry {
+            if diff.pixels == 0 {
                 "identical"
+            } else if same_geometry {
+                "equal up to rounding"
             } else {
                 "DIFFERS"
             },
@@ -171,4 +179,164 @@ pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
     }
     std::fs::remove_dir_all(&tmp).ok();
     Ok(bad)
+}
+
+/// Ulps of distance, and of a normal component (in units of the ulp of 1), by which a
+/// regenerated geometry reference may differ from the committed one. The reference chain
+/// rounds by the CPU it runs on: Mitsuba's CPU variants cast rays with Embree, which picks
+/// its kernels by the instruction set when it starts, and `scripts/mitsuba_refs.py` takes
+/// the distance with numpy, whose BLAS does the same. Measured: all 13 geometry references,
+/// regenerated on an AMD EPYC (AVX2, no AVX-512), differ from the committed ones in 41 to
+/// 70 of 1,728 pixels, by at most 2 ulps of distance, with the same hit masks and normals
+/// (conformance/docs/mitsuba.md). The gate's own geometry tolerance is far looser, so this
+/// bound is not what decides a scene.
+pub const GEOMETRY_ULPS: u32 = 4;
+
+/// How a regenerated geometry reference differs from the committed one.
+struct GeometryDiff {
+    /// Both sizes, when they differ (nothing else is compared then).
+    sizes: Option<((usize, usize), (usize, usize))>,
+    /// Pixels whose hit, distance or normal differ in any bit.
+    pixels: usize,
+    /// Pixels hit in one and missed in the other.
+    hit_flips: usize,
+    /// Largest distance difference in f32 ulps, over pixels both hit.
+    z_ulps: u32,
+    /// Largest normal component difference, in ulps of 1.
+    n_ulps: f64,
+    /// The first few differing pixels.
+    first: Vec<String>,
+}
+
+/// Distance in f32 ulps between two values stored as f32 (the EXR channels).
+fn ulps(a: f64, b: f64) -> u32 {
+    let key = |v: f64| {
+        // Sign-magnitude bits to a monotonic integer line (-0 and +0 both at 0).
+        let i = i64::from((v as f32).to_bits() as i32);
+        if i < 0 {
+            i64::from(i32::MIN) - i
+        } else {
+            i
+        }
+    };
+    u32::try_from((key(a) - key(b)).unsigned_abs()).unwrap_or(u32::MAX)
+}
+
+impl GeometryDiff {
+    fn new(new: &Geometry, old: &Geometry) -> GeometryDiff {
+        let mut d = GeometryDiff {
+            sizes: (new.size != old.size).then_some((new.size, old.size)),
+            pixels: 0,
+            hit_flips: 0,
+            z_ulps: 0,
+            n_ulps: 0.0,
+            first: Vec::new(),
+        };
+        if d.sizes.is_some() {
+            return d;
+        }
+        let w = new.size.0;
+        for i in 0..new.hit.len() {
+            let hit_flip = new.hit[i] != old.hit[i];
+            let z = ulps(new.z[i], old.z[i]);
+            let n = (0..3)
+                .map(|c| (new.n[3 * i + c] - old.n[3 * i + c]).abs() / f64::from(f32::EPSILON))
+                .fold(0.0, f64::max);
+            if !(hit_flip || z > 0 || n > 0.0) {
+                continue;
+            }
+            d.pixels += 1;
+            d.hit_flips += hit_flip as usize;
+            if new.hit[i] && old.hit[i] {
+                d.z_ulps = d.z_ulps.max(z);
+                d.n_ulps = d.n_ulps.max(n);
+            }
+            if d.first.len() < 5 {
+                d.first.push(format!(
+                    "({}, {}) distance {} now, {} committed ({z} ulps){}",
+                    i % w,
+                    i / w,
+                    new.z[i] as f32,
+                    old.z[i] as f32,
+                    if hit_flip { ", hit/miss differs" } else { "" }
+                ));
+            }
+        }
+        d
+    }
+
+    /// The same hits, and distances and normals within [`GEOMETRY_ULPS`].
+    fn within_rounding(&self) -> bool {
+        self.sizes.is_none()
+            && self.hit_flips == 0
+            && self.z_ulps <= GEOMETRY_ULPS
+            && self.n_ulps <= f64::from(GEOMETRY_ULPS)
+    }
+
+    fn describe(&self) -> String {
+        if let Some((a, b)) = self.sizes {
+            return format!("  geometry: {a:?} pixels now, {b:?} committed");
+        }
+        format!(
+            "  geometry: {} pixels differ ({} hit/miss), distance by up to {} ulps, normal \
+             components by up to {:.1} ulps of 1 (allowed: no hit/miss, {GEOMETRY_ULPS} ulps); \
+             first: {}",
+            self.pixels,
+            self.hit_flips,
+            self.z_ulps,
+            self.n_ulps,
+            self.first.join("; ")
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn geometry(z: &[f64], hit: &[bool]) -> Geometry {
+        Geometry {
+            size: (z.len(), 1),
+            z: z.to_vec(),
+            n: z.iter().flat_map(|_| [0.0, 0.0, 1.0]).collect(),
+            hit: hit.to_vec(),
+        }
+    }
+
+    #[test]
+    fn ulps_count_representable_f32_steps_across_zero() {
+        assert_eq!(ulps(1.0, 1.0), 0);
+        let next = f32::from_bits(1.0f32.to_bits() + 3) as f64;
+        assert_eq!(ulps(1.0, next), 3);
+        assert_eq!(ulps(next, 1.0), 3);
+        let tiny = f32::from_bits(1) as f64;
+        assert_eq!(ulps(tiny, -tiny), 2);
+    }
+
+    #[test]
+    fn rounding_differences_pass_and_real_ones_do_not() {
+        let z = 8.382542610168457f64;
+        let near = f32::from_bits((z as f32).to_bits() + GEOMETRY_ULPS) as f64;
+        let far = f32::from_bits((z as f32).to_bits() + GEOMETRY_ULPS + 1) as f64;
+        let old = geometry(&[z, 1.0], &[true, true]);
+        let same = GeometryDiff::new(&old, &old);
+        assert_eq!((same.pixels, same.within_rounding()), (0, true));
+        let rounded = GeometryDiff::new(&geometry(&[near, 1.0], &[true, true]), &old);
+        assert_eq!((rounded.pixels, rounded.z_ulps), (1, GEOMETRY_ULPS));
+        assert!(rounded.within_rounding(), "{}", rounded.describe());
+        let moved = GeometryDiff::new(&geometry(&[far, 1.0], &[true, true]), &old);
+        assert!(!moved.within_rounding(), "{}", moved.describe());
+        let flipped = GeometryDiff::new(&geometry(&[z, 0.0], &[true, false]), &old);
+        assert!(!flipped.within_rounding(), "{}", flipped.describe());
+        assert!(
+            flipped.describe().contains("1 hit/miss"),
+            "{}",
+            flipped.describe()
+        );
+        let mut turned = old.clone();
+        turned.n[2] -= 5.0 * f64::from(f32::EPSILON);
+        assert!(!GeometryDiff::new(&turned, &old).within_rounding());
+        let small = geometry(&[z], &[true]);
+        assert!(!GeometryDiff::new(&small, &old).within_rounding());
+    }
 }
