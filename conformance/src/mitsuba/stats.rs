@@ -323,6 +323,27 @@ mod tests {
     }
 
     #[test]
+    fn the_radiance_rmse_is_over_every_channel_of_every_pixel() {
+        // 2 × 2 pixels, one channel of one pixel off by 0.6: RMSE = 0.6 / sqrt(12).
+        let est = |mean: Vec<f64>| Estimate {
+            size: (2, 2),
+            var: vec![1.0; 12],
+            mean,
+            n: 16.0,
+        };
+        let mut off = vec![0.5; 12];
+        off[7] += 0.6;
+        let t = radiance_test(&est(off), &est(vec![0.5; 12]));
+        let want = 0.6 / 12f64.sqrt();
+        assert!(
+            (t.rmse - want).abs() < 1e-12,
+            "rmse {} (want {want}: the squared differences are averaged over 4 pixels × 3 \
+             channels; radiance_test in conformance/src/mitsuba/stats.rs)",
+            t.rmse
+        );
+    }
+
+    #[test]
     fn the_xyz_variance_comes_from_the_rgb_covariance() {
         // One pixel with a known RGB mean and covariance: the XYZ variance of each row is
         // row · Cov · rowᵀ.

@@ -597,6 +597,20 @@ mod tests {
         let mut c = c;
         c.class[0] = 1;
         assert_eq!(&diff_image(&c, &ours, &reference)[0..3], &[0, 160, 255]);
+        // Every agreeing pixel is its own reference luminance: each pixel and channel a
+        // different value, so a grey taken from another pixel or channel shows.
+        c.class = vec![0; W * H];
+        let n = (W * H) as f32;
+        let refr: Vec<f32> = (0..W * H * 3)
+            .map(|i| ((i / 3) as f32 + 0.3 * (i % 3) as f32) / n)
+            .collect();
+        let img = diff_image(&c, &refr, &refr);
+        for k in 0..W * H {
+            let lum = (0.2126 * refr[3 * k] + 0.7152 * refr[3 * k + 1] + 0.0722 * refr[3 * k + 2])
+                .clamp(0.0, 1.0);
+            let g = (lum * 90.0) as u8;
+            assert_eq!(&img[3 * k..3 * k + 3], &[g, g, g], "agreeing pixel {k}");
+        }
     }
 
     #[test]
