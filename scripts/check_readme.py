@@ -52,6 +52,9 @@ def plan(cmd, scratch):
         "[--spp N]": "",
         "--spp N": "--spp 4",
     }
+    if "export-mitsuba" in cmd:
+        # Mitsuba exports need a scene of the physical model.
+        subst["SCENE.toml"] = "conformance/scenes/mitsuba/mi_diffuse_point.toml"
     for k, v in subst.items():
         cmd = cmd.replace(k, v)
     argv = shlex.split(cmd)
