@@ -93,7 +93,15 @@ pub fn permute(mut i: u32, n: u32, key: u32) -> u32 {
             break;
         }
     }
-    (i.wrapping_add(key)) % n
+    // The final rotation by the key, without the wrap-around of `(i + key) % n` in 32
+    // bits (as the paper writes it): when i + key passes 2³², the wrapped sum is a
+    // different rotation for those i, and two indices can land on the same output.
+    let s = u64::from(i) + u64::from(key % n);
+    (if s >= u64::from(n) {
+        s - u64::from(n)
+    } else {
+        s
+    }) as u32
 }
 
 /// The first two dimensions of Sobol's sequence at index `i`, as 32-bit fractions.
@@ -188,6 +196,130 @@ impl PixelSampler {
                 let (sa, sb) = ((key >> 32) as u32, key as u32 ^ 0x9e37_79b9);
                 let s = 1.0 / 4_294_967_296.0;
                 ((a ^ sa) as f64 * s, (b ^ sb) as f64 * s)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The numbers each call position of a path gets, over all samples of one pixel: a
+    /// path asks for a 2D point, a 1D number, two more 2D points and two more 1D numbers.
+    fn dimensions(kind: SamplerKind, pixel: u64, spp: u32) -> Vec<Vec<f64>> {
+        let mut dims = vec![Vec::new(); 9];
+        for s in 0..spp {
+            let mut smp = PixelSampler::new(kind, pixel, s, spp);
+            let (a, b) = smp.next_2d();
+            let c = smp.next_1d();
+            let (d, e) = smp.next_2d();
+            let (f, g) = smp.next_2d();
+            let (h, i) = (smp.next_1d(), smp.next_1d());
+            for (k, v) in [a, b, c, d, e, f, g, h, i].into_iter().enumerate() {
+                assert!((0.0..1.0).contains(&v), "{kind:?}: {v} outside [0, 1)");
+                dims[k].push(v);
+            }
+        }
+        dims
+    }
+
+    /// Call positions of [`dimensions`] that are 1D numbers, and the pairs that are 2D points.
+    const ONE_D: [usize; 3] = [2, 7, 8];
+    const TWO_D: [(usize, usize); 3] = [(0, 1), (3, 4), (5, 6)];
+
+    fn strata(values: &[f64], n: usize) -> Vec<u32> {
+        let mut seen = vec![0u32; n];
+        for v in values {
+            seen[(v * n as f64) as usize] += 1;
+        }
+        seen
+    }
+
+    /// Stratified and Sobol samples put exactly one of a pixel's `spp` numbers in each
+    /// interval [k/spp, (k+1)/spp) of every 1D dimension, and so do Sobol's 2D points in
+    /// each coordinate (for powers of two, whose first 2^m points are a (0, m, 2)-net).
+    /// Stratified 2D points fall one in each cell of the √spp × √spp grid when spp is a
+    /// square, and are two stratified 1D numbers otherwise.
+    #[test]
+    fn stratified_and_sobol_samples_fill_every_stratum_once() {
+        for (kind, counts) in [
+            (
+                SamplerKind::Stratified,
+                &[1u32, 2, 5, 8, 16, 64, 100, 256][..],
+            ),
+            (SamplerKind::Sobol, &[1, 2, 4, 8, 16, 64, 256][..]),
+        ] {
+            for &spp in counts {
+                let root = (spp as f64).sqrt() as usize;
+                let grid = kind == SamplerKind::Stratified && root * root == spp as usize;
+                for pixel in [0u64, 1, 7, 12345, u64::MAX] {
+                    let dims = dimensions(kind, pixel, spp);
+                    let at = |what: &str, k: usize, seen: Vec<u32>| {
+                        assert!(
+                            seen.iter().all(|&c| c == 1),
+                            "{kind:?}, {spp} spp, pixel {pixel}, {what} {k}: strata counts \
+                             {seen:?} (one each expected; renderer/src/sampler.rs)"
+                        );
+                    };
+                    for k in ONE_D {
+                        at("1D number", k, strata(&dims[k], spp as usize));
+                    }
+                    for (x, y) in TWO_D {
+                        if grid {
+                            let cells: Vec<f64> = (0..spp as usize)
+                                .map(|s| {
+                                    let cell = (dims[y][s] * root as f64) as usize * root
+                                        + (dims[x][s] * root as f64) as usize;
+                                    (cell as f64 + 0.5) / spp as f64
+                                })
+                                .collect();
+                            at("2D grid cell of point", x, strata(&cells, spp as usize));
+                        } else {
+                            at("2D coordinate", x, strata(&dims[x], spp as usize));
+                            at("2D coordinate", y, strata(&dims[y], spp as usize));
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Independent numbers are uniform: over many samples each dimension's mean is 1/2
+    /// and its variance 1/12, within five standard errors.
+    #[test]
+    fn independent_samples_are_uniform() {
+        let spp = 4096;
+        for (k, dim) in dimensions(SamplerKind::Independent, 3, spp)
+            .iter()
+            .enumerate()
+        {
+            let n = dim.len() as f64;
+            let mean = dim.iter().sum::<f64>() / n;
+            let var = dim.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
+            assert!(
+                (mean - 0.5).abs() < 5.0 * (1.0f64 / 12.0 / n).sqrt(),
+                "dimension {k}: mean {mean}"
+            );
+            // The variance of a uniform sample variance is (1/80 - 1/144) / n.
+            assert!(
+                (var - 1.0 / 12.0).abs() < 5.0 * ((1.0 / 80.0 - 1.0 / 144.0) / n).sqrt(),
+                "dimension {k}: variance {var}"
+            );
+        }
+    }
+
+    /// `permute` is a bijection of 0..n for every key.
+    #[test]
+    fn permute_is_a_permutation() {
+        for n in [1u32, 2, 3, 4, 5, 7, 8, 31, 32, 33, 100, 1000] {
+            for key in [0u32, 1, 0xdead_beef, u32::MAX] {
+                let mut seen = vec![false; n as usize];
+                for i in 0..n {
+                    let p = permute(i, n, key);
+                    assert!(p < n && !seen[p as usize], "n {n}, key {key}: {i} -> {p}");
+                    seen[p as usize] = true;
+                }
             }
         }
     }
