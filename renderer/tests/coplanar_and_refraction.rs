@@ -283,3 +283,60 @@ fn thin_slab_transmits_the_background() {
     let img = render_with(&scene(&slab_scene(1e-4)), 2, Spawn::Fixed(1e-3));
     assert!(img.rgb.chunks(3).all(|px| px == (pig * bg).to_array()));
 }
+
+/// Glass that filters one channel only still transmits it: whether a surface transmits at
+/// all is decided by the filter's luminance-weighted strength (0.297, 0.589, 0.114, as
+/// POV-Ray weighs it) against `adc_bailout`, and a pure blue filter (strength 0.114) is
+/// well above the default 1/255.
+#[test]
+fn a_filter_of_one_channel_transmits_that_channel() {
+    let bg = glam::Vec3::new(1.0, 0.9, 0.8);
+    for (pigment, at) in [
+        ([1.0, 0.0, 0.0], 0),
+        ([0.0, 1.0, 0.0], 1),
+        ([0.0, 0.0, 1.0], 2),
+    ] {
+        let text =
+            slab_scene(1e-2).replace("color = [0.5, 0.8, 1.0]", &format!("color = {pigment:?}"));
+        let img = render_with(&scene(&text), 2, Spawn::Robust);
+        let pig = glam::Vec3::from_array(pigment.map(|v| v as f32));
+        let want = pig * (pig * bg);
+        for px in img.rgb.chunks(3) {
+            assert_eq!(
+                px,
+                want.to_array(),
+                "a filter of channel {at} only: the background should show through in that \
+                 channel (the transmission test in Shader::shade, renderer/src/shading.rs)"
+            );
+        }
+    }
+}
+
+/// Surfaces with the same ior on both sides (clear glass of ior 1 in air) are passed
+/// straight through without using up a trace level: behind eight such surfaces, with
+/// `max_depth = 2`, the background still shows, filtered by each.
+#[test]
+fn surfaces_of_equal_ior_do_not_use_trace_levels() {
+    let mut text = slab_scene(1e-2)
+        .replace("color = [0.5, 0.8, 1.0]", "color = [1.0, 1.0, 1.0]")
+        .replace("ior = 1.5", "ior = 1.0")
+        .replace(
+            "background = [1, 0.9, 0.8]",
+            "background = [1, 0.9, 0.8]\nmax_depth = 2",
+        );
+    for k in 1..4 {
+        text += &format!(
+            "\n[[objects]]\ntype = \"box\"\nmaterial = \"glass\"\ntransform = [{{ scale = [3, 3, 0.005] }}, {{ translate = [0, 0, {}] }}]\n",
+            0.5 * k as f64
+        );
+    }
+    let img = render_with(&scene(&text), 2, Spawn::Robust);
+    for px in img.rgb.chunks(3) {
+        assert_eq!(
+            px,
+            [1.0, 0.9, 0.8],
+            "four slabs of ior 1 (eight surfaces) at max_depth 2: the background should show \
+             through (the straight-through case in Shader::shade, renderer/src/shading.rs)"
+        );
+    }
+}
