@@ -304,10 +304,17 @@ fn far_side(
 
 #[test]
 fn far_cylinder_and_cone_sides_t_error() {
-    // t error in f32 ulps against the f64 closed form, at distance/size 1e1 to 1e5.
-    // Bound 8 ulps in f32 (as for the sphere), measured 3.3 (median 0.26–0.51); in f64
-    // 1e-3 f32 ulps (agreement only). Wrong hit/miss: 0.
-    let max_ulps = if F64 { 1e-3 } else { 8.0 };
+    // t error in f32 ulps against the f64 closed form, at distance/size 1e1 to 1e5, in
+    // f32: the cylinder's roots are finished in f32 (bound 8 ulps as for the sphere,
+    // measured 3.3, median 0.42–0.51); the cone's are the f64 roots rounded once (bound 1,
+    // measured 0.5: it was 3.4 with an f32 Newton step after them, which mutation testing
+    // showed only added rounding). In f64, 1e-3 f32 ulps (agreement only). Wrong
+    // hit/miss: 0.
+    let max_ulps = |shape: &Shape| match (F64, shape) {
+        (true, _) => 1e-3,
+        (false, Shape::Cone { .. }) => 1.0,
+        _ => 8.0,
+    };
     // Cylinder: x² + z² = 1. Cone: x² + z² = ((1 − y)/2)², i.e. x² + z² − (y − 1)²/4 = 0.
     let cases: [(Shape, DVec3, DVec3, fn(f64) -> f64); 4] = [
         (
@@ -348,8 +355,10 @@ fn far_cylinder_and_cone_sides_t_error() {
                 "{shape:?} D = {dist:e}: only {hits} of 20000 rays hit"
             );
             assert!(
-                worst <= max_ulps,
-                "{shape:?} D = {dist:e}: t error {worst} f32 ulps against the f64 closed form (renderer/src/shapes/)"
+                worst <= max_ulps(shape),
+                "{shape:?} D = {dist:e}: t error {worst} f32 ulps against the f64 closed form, \
+                 bound {} (renderer/src/shapes/)",
+                max_ulps(shape)
             );
         }
     }
