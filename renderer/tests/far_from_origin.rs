@@ -306,9 +306,9 @@ fn far_side(
 fn far_cylinder_and_cone_sides_t_error() {
     // t error in f32 ulps against the f64 closed form, at distance/size 1e1 to 1e5, in
     // f32: the cylinder's roots are finished in f32 (bound 8 ulps as for the sphere,
-    // measured 3.3, median 0.42–0.51); the cone's are the f64 roots rounded once (bound 1,
-    // measured 0.5: it was 3.4 with an f32 Newton step after them, which mutation testing
-    // showed only added rounding). In f64, 1e-3 f32 ulps (agreement only). Wrong
+    // measured 3.3, median 0.42–0.51); the cone's are refined in f64 and rounded once
+    // (bound 1, measured 0.5: it was 3.4 with the Newton step in f32, which mutation
+    // testing showed only added rounding). In f64, 1e-3 f32 ulps (agreement only). Wrong
     // hit/miss: 0.
     let max_ulps = |shape: &Shape| match (F64, shape) {
         (true, _) => 1e-3,
