@@ -285,6 +285,30 @@ mod tests {
         }
     }
 
+    /// Each call position of a path gets its own numbers: no two dimensions of a pixel
+    /// repeat each other (a repeated key would correlate a path's bounces).
+    #[test]
+    fn every_dimension_gets_its_own_numbers() {
+        for kind in [
+            SamplerKind::Independent,
+            SamplerKind::Stratified,
+            SamplerKind::Sobol,
+        ] {
+            for spp in [4u32, 16, 64] {
+                let dims = dimensions(kind, 5, spp);
+                for a in 0..dims.len() {
+                    for b in a + 1..dims.len() {
+                        assert_ne!(
+                            dims[a], dims[b],
+                            "{kind:?}, {spp} spp: call positions {a} and {b} got the same \
+                             numbers (each dimension needs its own key; renderer/src/sampler.rs)"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     /// Independent numbers are uniform: over many samples each dimension's mean is 1/2
     /// and its variance 1/12, within five standard errors.
     #[test]

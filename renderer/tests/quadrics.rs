@@ -272,3 +272,53 @@ fn cone_open() {
     );
     check(&s, [0., -1.5, -5.], [0., 0., 1.], Miss);
 }
+
+/// Rays parallel to one of the cone's generator lines (the quadratic's leading coefficient
+/// vanishes, and the cone has a single root): from o = q − g with q inside the solid and g
+/// a generator direction, F(o + t·g) is linear in t. The hit must lie at that root, against
+/// an f64 solution of the ray as rounded to the render precision.
+#[test]
+fn cone_rays_parallel_to_a_generator_line() {
+    let cone = Shape::Cone { capped: false };
+    let mut n = 0;
+    for k in 0..64 {
+        let phi = 2.0 * PI * k as f64 / 64.0 + 0.1;
+        let psi = 1.7 * k as f64;
+        let (r, y) = (0.2 * (k % 5) as f64 / 5.0, -0.5 + (k % 7) as f64 / 7.0);
+        let q = DVec3::new(
+            r * psi.cos() * 0.5 * (1.0 - y),
+            y,
+            r * psi.sin() * 0.5 * (1.0 - y),
+        );
+        let g = DVec3::new(phi.cos(), -2.0, phi.sin());
+        let ray = ray((q - g).to_array(), g.to_array());
+        // The root of the rounded ray, in f64: a·t² + 2b·t + c = 0 with a ≈ 0.
+        let (o, d) = (DVec3::from(ray.o.as_dvec3()), DVec3::from(ray.d.as_dvec3()));
+        let (ow, dw) = (1.0 - o.y, -d.y);
+        let a = d.x * d.x + d.z * d.z - 0.25 * dw * dw;
+        let b = o.x * d.x + o.z * d.z - 0.25 * ow * dw;
+        let c = o.x * o.x + o.z * o.z - 0.25 * ow * ow;
+        let want = if a.abs() < 1e-12 {
+            -c / (2.0 * b)
+        } else {
+            let q = -(b + (b * b - a * c).sqrt().copysign(b));
+            let (t0, t1) = (q / a, c / q);
+            [t0, t1]
+                .into_iter()
+                .filter(|t| *t > 0.0 && (o.y + t * d.y).abs() <= 1.0)
+                .fold(f64::INFINITY, f64::min)
+        };
+        let h = cone.intersect(&ray, 0.0, INF).unwrap_or_else(|| {
+            panic!("ray {k} parallel to a generator line missed (want t = {want})")
+        });
+        assert!(
+            ((h.t as f64 - want) / want).abs() < 1e-5,
+            "ray {k} parallel to a generator line: t {} vs {want} (the one-root case of \
+             renderer/src/shapes/cone.rs)",
+            h.t
+        );
+        check_record(&cone, &ray, &h);
+        n += 1;
+    }
+    assert_eq!(n, 64);
+}
