@@ -293,7 +293,7 @@ fn cone_rays_parallel_to_a_generator_line() {
         let g = DVec3::new(phi.cos(), -2.0, phi.sin());
         let ray = ray((q - g).to_array(), g.to_array());
         // The root of the rounded ray, in f64: a·t² + 2b·t + c = 0 with a ≈ 0.
-        let (o, d) = (DVec3::from(ray.o.as_dvec3()), DVec3::from(ray.d.as_dvec3()));
+        let (o, d) = (renderer::real::dvec3(ray.o), renderer::real::dvec3(ray.d));
         let (ow, dw) = (1.0 - o.y, -d.y);
         let a = d.x * d.x + d.z * d.z - 0.25 * dw * dw;
         let b = o.x * d.x + o.z * d.z - 0.25 * ow * dw;
