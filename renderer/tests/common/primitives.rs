@@ -187,6 +187,14 @@ pub fn check_record(s: &Shape, r: &Ray, h: &Hit) {
         "error bound not finite and non-negative, {what}"
     );
     let p = dvec3(h.p);
+    // The bound is a rounding bound, not a licence: a few dozen ulps of the point's size,
+    // never a fraction of the object (a loose bound moves spawned rays off the surface).
+    let loose = 1e-4 * (1.0 + p.abs().max_element());
+    assert!(
+        dvec3(h.err).max_element() <= loose,
+        "error bound {:?} is far looser than rounding (limit {loose:e}), {what}",
+        h.err
+    );
     let dist = surface_distance(s, p);
     // The true point lies on the surface and within `err` of p, componentwise. The slack
     // only covers the f64 rounding of the distance computation itself.
