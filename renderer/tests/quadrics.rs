@@ -322,3 +322,19 @@ fn cone_rays_parallel_to_a_generator_line() {
     }
     assert_eq!(n, 64);
 }
+
+/// `t_min` is exclusive: a ray that starts exactly on a sphere and leaves it has its root
+/// at t = 0 = t_min, which is not a hit (a spawned ray must not re-hit its own surface
+/// there); with t_min just below 0 it is.
+#[test]
+fn a_root_at_t_min_is_not_a_hit() {
+    let leaving = ray([1.0, 0.0, 0.0], [1.0, 0.0, 0.0]);
+    assert!(
+        Shape::Sphere.intersect(&leaving, 0.0, INF).is_none(),
+        "a sphere hit at t = t_min = 0 (renderer/src/shapes/sphere.rs: t_min < t < t_max)"
+    );
+    let h = Shape::Sphere
+        .intersect(&leaving, -1e-3, INF)
+        .expect("the root at t = 0");
+    assert_eq!(h.t, 0.0);
+}
