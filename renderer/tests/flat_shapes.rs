@@ -151,3 +151,24 @@ fn rectangle() {
         hit(1.0, [0., 1., 0.], [0.25, 0.75]),
     );
 }
+
+/// The rectangle is closed: a ray that meets its plane exactly on an edge or a corner
+/// (|x| = 1 or |z| = 1) hits it, so two rectangles sharing an edge leave no gap there.
+#[test]
+fn rays_exactly_on_a_rectangle_edge_hit() {
+    for (x, z) in [
+        (1.0, 0.3),
+        (-1.0, -0.7),
+        (0.2, 1.0),
+        (0.5, -1.0),
+        (1.0, 1.0),
+        (-1.0, 1.0),
+    ] {
+        let down = ray([x, 2.0, z], [0.0, -1.0, 0.0]);
+        let h = Shape::Rectangle.intersect(&down, 0.0, INF).unwrap_or_else(|| {
+            panic!("a ray onto the rectangle's edge at ({x}, {z}) missed (renderer/src/shapes/flat.rs)")
+        });
+        assert_eq!(h.t, 2.0);
+        check_record(&Shape::Rectangle, &down, &h);
+    }
+}
