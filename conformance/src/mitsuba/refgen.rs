@@ -140,7 +140,7 @@ pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
         let g_old = read_geometry(&committed.join(format!("{}.geom.exr", e.name)))?;
         let diff = GeometryDiff::new(&g_new, &g_old);
         let same_geometry = diff.within_rounding();
-        if diff.pixels > 0 {
+        if !diff.identical() {
             eprintln!("{}", diff.describe());
         }
         let (_, r_new) = read_radiance(&tmp.join(format!("{}.exr", e.name)), spp)?;
@@ -157,7 +157,7 @@ pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
         eprintln!(
             "{:<24} geometry {} radiance {} (pixel pass {:.2} %, global z {:.2?}) manifest {}",
             e.name,
-            if diff.pixels == 0 {
+            if diff.identical() {
                 "identical"
             } else if same_geometry {
                 "equal up to rounding"
@@ -265,6 +265,11 @@ impl GeometryDiff {
         d
     }
 
+    /// The same size and every pixel the same in every bit.
+    fn identical(&self) -> bool {
+        self.sizes.is_none() && self.pixels == 0
+    }
+
     /// The same hits, and distances and normals within [`GEOMETRY_ULPS`].
     fn within_rounding(&self) -> bool {
         self.sizes.is_none()
@@ -320,7 +325,7 @@ mod tests {
         let far = f32::from_bits((z as f32).to_bits() + GEOMETRY_ULPS + 1) as f64;
         let old = geometry(&[z, 1.0], &[true, true]);
         let same = GeometryDiff::new(&old, &old);
-        assert_eq!((same.pixels, same.within_rounding()), (0, true));
+        assert!(same.identical() && same.within_rounding());
         let rounded = GeometryDiff::new(&geometry(&[near, 1.0], &[true, true]), &old);
         assert_eq!((rounded.pixels, rounded.z_ulps), (1, GEOMETRY_ULPS));
         assert!(rounded.within_rounding(), "{}", rounded.describe());
@@ -336,7 +341,7 @@ mod tests {
         let mut turned = old.clone();
         turned.n[2] -= 5.0 * f64::from(f32::EPSILON);
         assert!(!GeometryDiff::new(&turned, &old).within_rounding());
-        let small = geometry(&[z], &[true]);
-        assert!(!GeometryDiff::new(&small, &old).within_rounding());
+        let small = GeometryDiff::new(&geometry(&[z], &[true]), &old);
+        assert!(!small.identical() && !small.within_rounding());
     }
 }
