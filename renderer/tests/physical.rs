@@ -1,6 +1,6 @@
 //! Closed-form checks of the physically based model: the white furnace, a point light over
-//! a diffuse plane, a disk area light over a diffuse plane (both strategies of MIS), and the
-//! samplers' error against independent sampling.
+//! a diffuse plane, a square area light over a diffuse plane (both strategies of MIS), and
+//! the samplers' error against independent sampling.
 
 use renderer::render::{render, Image, Options};
 use renderer::sampler::SamplerKind;
@@ -22,6 +22,20 @@ fn run(s: &Scene, spp: u32) -> Image {
             ..Options::default()
         },
     )
+}
+
+/// The mean of channel `c` over `pixels` of a moments render at `spp`, and the standard
+/// error of that mean (each pixel's variance of its mean from its second moment).
+fn mean_and_error(img: &Image, spp: u32, pixels: &[usize], c: usize) -> (f64, f64) {
+    let m = img.moments.as_ref().expect("a render with moments");
+    let (mut sum, mut var) = (0.0, 0.0);
+    for &k in pixels {
+        let mean = img.rgb[3 * k + c] as f64;
+        sum += mean;
+        var += (m[6 * k + c] as f64 - mean * mean).max(0.0) / spp as f64;
+    }
+    let n = pixels.len() as f64;
+    (sum / n, var.sqrt() / n)
 }
 
 const FURNACE: &str = r#"
@@ -61,7 +75,6 @@ fn test01_white_furnace() {
             let spp = 256;
             let img = run(&s, spp);
             let aov = img.aov.as_ref().unwrap();
-            let m = img.moments.as_ref().unwrap();
             // Pixels fully on the sphere: not on the border, and their centre and all eight
             // neighbours' centres hit it (the sphere's outline is convex).
             let (w, h) = (16usize, 16usize);
@@ -73,25 +86,11 @@ fn test01_white_furnace() {
                     && (j - 1..j + 2)
                         .all(|y| (i - 1..i + 2).all(|x| aov.object_id[y * w + x] == 1.0))
             };
-            let (mut sum, mut var, mut n) = ([0f64; 3], [0f64; 3], 0usize);
-            for j in 0..h {
-                for i in 0..w {
-                    if !inside(i, j) {
-                        continue;
-                    }
-                    let k = j * w + i;
-                    for c in 0..3 {
-                        let mean = img.rgb[3 * k + c] as f64;
-                        sum[c] += mean;
-                        var[c] += (m[6 * k + c] as f64 - mean * mean).max(0.0) / spp as f64;
-                    }
-                    n += 1;
-                }
-            }
+            let pixels: Vec<usize> = (0..w * h).filter(|k| inside(k % w, k / w)).collect();
+            let n = pixels.len();
             assert!(n > 40, "{n} interior pixels");
             for (c, want) in [0.4, 0.3, 0.2].into_iter().enumerate() {
-                let mean = sum[c] / n as f64;
-                let se = var[c].sqrt() / n as f64;
+                let (mean, se) = mean_and_error(&img, spp, &pixels, c);
                 let z = (mean - want) / se.max(1e-12);
                 assert!(
                     z.abs() < 5.0,
@@ -246,16 +245,9 @@ transform = [{ rotate = { axis = [1, 0, 0], degrees = 180 } }, { translate = [0,
         let s = scene(&text.replace("INTEGRATOR", integrator));
         let spp = 16384;
         let img = run(&s, spp);
-        let m = img.moments.as_ref().unwrap();
         for (c, radiance) in [4.0, 2.0, 1.0].into_iter().enumerate() {
             let want = 0.5 * radiance * form_factor;
-            let (mut sum, mut var) = (0.0, 0.0);
-            for k in 0..4 {
-                let mean = img.rgb[3 * k + c] as f64;
-                sum += mean;
-                var += (m[6 * k + c] as f64 - mean * mean).max(0.0) / spp as f64;
-            }
-            let (mean, se) = (sum / 4.0, var.sqrt() / 4.0);
+            let (mean, se) = mean_and_error(&img, spp, &[0, 1, 2, 3], c);
             let z = (mean - want) / se.max(1e-12);
             assert!(
                 z.abs() < 5.0,
