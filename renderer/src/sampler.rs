@@ -309,6 +309,54 @@ mod tests {
         }
     }
 
+    /// No two call positions of a path are correlated: over 256 pixels × 16 samples, the
+    /// Pearson correlation of every pair of positions (and of the two coordinates of each
+    /// 2D point) is within 5 standard errors (1/√n) of 0. A dimension that reuses another's
+    /// key — a 2D point that does not advance the dimension counter, say — gives numbers
+    /// that differ but follow each other, which `every_dimension_gets_its_own_numbers`
+    /// cannot see.
+    #[test]
+    fn dimensions_are_uncorrelated() {
+        for kind in [
+            SamplerKind::Independent,
+            SamplerKind::Stratified,
+            SamplerKind::Sobol,
+        ] {
+            // 16 spp: a square, so stratified 2D points take the grid path.
+            let mut dims = vec![Vec::new(); 9];
+            for pixel in 0..256u64 {
+                for (k, d) in dimensions(kind, pixel * 7919 + 3, 16)
+                    .into_iter()
+                    .enumerate()
+                {
+                    dims[k].extend(d);
+                }
+            }
+            let n = dims[0].len() as f64;
+            let corr = |x: &[f64], y: &[f64]| {
+                let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+                let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+                for (a, b) in x.iter().zip(y) {
+                    sxy += (a - mx) * (b - my);
+                    sxx += (a - mx) * (a - mx);
+                    syy += (b - my) * (b - my);
+                }
+                sxy / (sxx * syy).sqrt()
+            };
+            for a in 0..dims.len() {
+                for b in a + 1..dims.len() {
+                    let r = corr(&dims[a], &dims[b]);
+                    assert!(
+                        r.abs() < 5.0 / n.sqrt(),
+                        "{kind:?}: call positions {a} and {b} are correlated (r = {r:.3} over \
+                         {n} samples; each dimension needs its own key and the counter must \
+                         advance past a 2D point; renderer/src/sampler.rs)"
+                    );
+                }
+            }
+        }
+    }
+
     /// Independent numbers are uniform: over many samples each dimension's mean is 1/2
     /// and its variance 1/12, within five standard errors.
     #[test]

@@ -251,6 +251,19 @@ fn seams_apexes_edges_and_corners_hit() {
         let d = DVec3::new(s * phi.cos(), -1.0, s * phi.sin()) * rng.range(0.2, 3.0);
         apex.check(&cone, DVec3::Y, d, rng.range(0.1, 5.0));
     }
+    // Cone apex from inside: rays leaving the solid through the apex (a refracted ray in
+    // a glass cone, say), from an origin inside it, within the tangent cone there.
+    // Its own generator, so that the rays of the other seams stay as measured.
+    let mut apex_out = Seam::default();
+    let mut rng_out = SplitMix(18);
+    for _ in 0..N {
+        let rng = &mut rng_out;
+        let phi = rng.range(0.0, TAU);
+        let s = rng.range(0.0, 0.45);
+        let d = DVec3::new(s * phi.cos(), 1.0, s * phi.sin()) * rng.range(0.2, 3.0);
+        // Inside: above the base (y > −1).
+        apex_out.check(&cone, DVec3::Y, d, rng.range(0.01, 1.99) / d.y);
+    }
     // Cone base rim.
     let mut base = Seam::default();
     for _ in 0..N {
@@ -295,12 +308,13 @@ fn seams_apexes_edges_and_corners_hit() {
     for (name, seam) in [
         ("cylinder rims", &rim),
         ("cone apex", &apex),
+        ("cone apex from inside", &apex_out),
         ("cone base rim", &base),
         ("box edges and corners", &edges),
     ] {
         report(&format!("seams, {name}"), format!("{seam:?}"));
     }
-    for seam in [&rim, &apex, &base, &edges] {
+    for seam in [&rim, &apex, &apex_out, &base, &edges] {
         assert_eq!(seam.wrong, 0, "{seam:?}");
         assert!(seam.worst <= 16.0, "{seam:?}");
     }

@@ -292,3 +292,111 @@ pub(crate) fn surface(
     };
     Hit::new(t, p, err, n_geo, n_shade, uv)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small deterministic generator (SplitMix64) for the tests' random triangles.
+    struct Rng(u64);
+    impl Rng {
+        fn f(&mut self) -> Real {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            ((crate::sampler::mix64(self.0) >> 40) as f64 / (1u64 << 24) as f64) as Real
+        }
+        fn range(&mut self, lo: Real, hi: Real) -> Real {
+            lo + (hi - lo) * self.f()
+        }
+    }
+
+    /// What `hit4` promises to be: the scalar test on each lane in order, keeping a
+    /// strictly closer hit (the lowest lane on a tie).
+    fn scalar_loop(
+        wr: &WoopRay,
+        tris: &[[Vec3; 3]],
+        t_min: Real,
+        t_max: Real,
+    ) -> Option<(usize, Real, [Real; 3])> {
+        let mut best: Option<(usize, Real, [Real; 3])> = None;
+        for (lane, [p0, p1, p2]) in tris.iter().enumerate() {
+            if let Some((t, b)) = wr.hit(*p0, *p1, *p2, t_min, t_max) {
+                if best.is_none_or(|(_, tb, _)| t < tb) {
+                    best = Some((lane, t, b));
+                }
+            }
+        }
+        best
+    }
+
+    /// `hit4` gives the scalar loop's answer bit for bit (lane, t and barycentrics) for
+    /// one to four lanes, on rays through the inside of triangles and on rays exactly
+    /// through an edge, where one edge function is exactly 0 in the render precision and
+    /// the scalar test recomputes all three in f64 (so the other two, and the
+    /// barycentrics, differ in their last bits from the render-precision values). A lane
+    /// with any edge function exactly 0 must take that fallback, not only a lane with all
+    /// three 0.
+    #[test]
+    fn hit4_is_the_scalar_loop_bit_for_bit() {
+        let mut rng = Rng(42);
+        let (mut hits, mut edge_hits) = (0, 0);
+        for case in 0..4000 {
+            let lanes = 1 + case % 4;
+            // A ray along +z (so the shear is the identity and coordinates relative to
+            // the origin are exact) through (c, y).
+            let (c, y) = (rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            let ray = Ray::new(
+                Vec3::new(c, y, -3.0),
+                Vec3::new(0.0, 0.0, rng.range(0.5, 2.0)),
+            );
+            let wr = WoopRay::new(&ray);
+            let on_edge = case % 2 == 0;
+            let mut tris = Vec::new();
+            for _ in 0..lanes {
+                let tri = if on_edge {
+                    // An edge on the line x = c, through the ray: that edge function is 0.
+                    let (y0, y1) = (y - rng.range(0.1, 1.0), y + rng.range(0.1, 1.0));
+                    let side = if rng.f() < 0.5 { -1.0 } else { 1.0 };
+                    let x2 = c + side * rng.range(0.1, 1.0);
+                    let y2 = rng.range(y0, y1);
+                    [
+                        Vec3::new(c, y0, rng.range(-1.0, 1.0)),
+                        Vec3::new(c, y1, rng.range(-1.0, 1.0)),
+                        Vec3::new(x2, y2, rng.range(-1.0, 1.0)),
+                    ]
+                } else {
+                    // Any triangle near the ray.
+                    let mut p = || {
+                        Vec3::new(
+                            c + rng.range(-1.0, 1.0),
+                            y + rng.range(-1.0, 1.0),
+                            rng.range(-1.0, 1.0),
+                        )
+                    };
+                    [p(), p(), p()]
+                };
+                tris.push(tri);
+            }
+            let pack = TriPack::new(&tris);
+            for (t_min, t_max) in [(0.0, Real::INFINITY), (2.5, 3.5)] {
+                let want = scalar_loop(&wr, &tris, t_min, t_max);
+                let got = wr.hit4(&pack, lanes, t_min, t_max);
+                let bits = |h: Option<(usize, Real, [Real; 3])>| {
+                    h.map(|(l, t, b)| (l, t.to_bits(), b.map(Real::to_bits)))
+                };
+                assert_eq!(
+                    bits(got),
+                    bits(want),
+                    "case {case}, {lanes} lanes, t in ({t_min}, {t_max}): hit4 {got:?}, the \
+                     scalar loop {want:?} (renderer/src/shapes/triangle.rs, WoopRay::hit4)"
+                );
+                hits += usize::from(want.is_some());
+                edge_hits += usize::from(on_edge && want.is_some());
+            }
+        }
+        // Worth something only if both kinds of ray hit often.
+        assert!(
+            hits > 2000 && edge_hits > 1000,
+            "{hits} hits, {edge_hits} on edges"
+        );
+    }
+}
