@@ -332,47 +332,48 @@ mod tests {
     /// one to four lanes, on rays through the inside of triangles and on rays exactly
     /// through an edge, where one edge function is exactly 0 in the render precision and
     /// the scalar test recomputes all three in f64 (so the other two, and the
-    /// barycentrics, differ in their last bits from the render-precision values). A lane
-    /// with any edge function exactly 0 must take that fallback, not only a lane with all
-    /// three 0.
+    /// barycentrics, can differ in their last bits from the render-precision values). A
+    /// lane with any one edge function exactly 0 must take that fallback, not only a lane
+    /// with all three 0.
     #[test]
     fn hit4_is_the_scalar_loop_bit_for_bit() {
         let mut rng = Rng(42);
-        let (mut hits, mut edge_hits) = (0, 0);
-        for case in 0..4000 {
+        let (mut hits, mut edge_hits, mut differs) = (0, 0, 0);
+        for case in 0..6000 {
             let lanes = 1 + case % 4;
-            // A ray along +z (so the shear is the identity and coordinates relative to
-            // the origin are exact) through (c, y).
-            let (c, y) = (rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            // A ray along +z from above the origin: the shear is the identity, and a
+            // vertex's coordinates relative to the ray are exact.
             let ray = Ray::new(
-                Vec3::new(c, y, -3.0),
+                Vec3::new(0.0, 0.0, -3.0),
                 Vec3::new(0.0, 0.0, rng.range(0.5, 2.0)),
             );
             let wr = WoopRay::new(&ray);
             let on_edge = case % 2 == 0;
             let mut tris = Vec::new();
             for _ in 0..lanes {
+                let mut z = || rng.range(-1.0, 1.0);
+                let (z0, z1, z2) = (z(), z(), z());
+                let (ax, ay) = (rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+                let (cx, cy) = (rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
                 let tri = if on_edge {
-                    // An edge on the line x = c, through the ray: that edge function is 0.
-                    let (y0, y1) = (y - rng.range(0.1, 1.0), y + rng.range(0.1, 1.0));
-                    let side = if rng.f() < 0.5 { -1.0 } else { 1.0 };
-                    let x2 = c + side * rng.range(0.1, 1.0);
-                    let y2 = rng.range(y0, y1);
-                    [
-                        Vec3::new(c, y0, rng.range(-1.0, 1.0)),
-                        Vec3::new(c, y1, rng.range(-1.0, 1.0)),
-                        Vec3::new(x2, y2, rng.range(-1.0, 1.0)),
-                    ]
+                    // The edge p0 p1 passes exactly through the ray: p1 = −p0/2 (exact),
+                    // so its edge function b.x·a.y − b.y·a.x is exactly 0, while the other
+                    // two have two non-zero products each.
+                    let mut tri = [
+                        Vec3::new(ax, ay, z0),
+                        Vec3::new(-0.5 * ax, -0.5 * ay, z1),
+                        Vec3::new(cx, cy, z2),
+                    ];
+                    // The zero edge function is then w, u or v.
+                    tri.rotate_left(case / 2 % 3);
+                    tri
                 } else {
-                    // Any triangle near the ray.
-                    let mut p = || {
-                        Vec3::new(
-                            c + rng.range(-1.0, 1.0),
-                            y + rng.range(-1.0, 1.0),
-                            rng.range(-1.0, 1.0),
-                        )
-                    };
-                    [p(), p(), p()]
+                    let (bx, by) = (rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+                    [
+                        Vec3::new(ax, ay, z0),
+                        Vec3::new(bx, by, z1),
+                        Vec3::new(cx, cy, z2),
+                    ]
                 };
                 tris.push(tri);
             }
@@ -391,12 +392,23 @@ mod tests {
                 );
                 hits += usize::from(want.is_some());
                 edge_hits += usize::from(on_edge && want.is_some());
+                // How often the render-precision edge functions would have given other
+                // barycentrics than the f64 fallback (what the fallback is for).
+                if let (true, Some((lane, _, b))) = (on_edge, want) {
+                    let [p0, p1, p2] = tris[lane];
+                    let (a, bb, c) = (p0 - ray.o, p1 - ray.o, p2 - ray.o);
+                    let u = c.x * bb.y - c.y * bb.x;
+                    let v = a.x * c.y - a.y * c.x;
+                    let w = bb.x * a.y - bb.y * a.x;
+                    let inv = 1.0 / (u + v + w);
+                    differs += usize::from([u * inv, v * inv, w * inv] != b);
+                }
             }
         }
         // Worth something only if both kinds of ray hit often.
         assert!(
-            hits > 2000 && edge_hits > 1000,
-            "{hits} hits, {edge_hits} on edges"
+            hits > 2000 && edge_hits > 1000 && differs > 100,
+            "{hits} hits, {edge_hits} on edges, {differs} where the fallback changes bits"
         );
     }
 }
