@@ -7,6 +7,7 @@ use crate::aggregate::Shape;
 use crate::material::Color;
 use crate::real::{Real, Vec3};
 use crate::transform::Transform;
+use glam::DVec3;
 use serde::Deserialize;
 use std::f64::consts::PI;
 
@@ -49,18 +50,152 @@ pub struct AreaLight {
     pub radiance: Color,
     /// |det M| of the transform (1 without one).
     det: Real,
+    /// For a sphere placed by a similarity (rotation, uniform scale, translation): its
+    /// world centre and radius, so that it is sampled by the cone of directions it
+    /// subtends (as Mitsuba 3 samples its `sphere` emitter) instead of by area.
+    ball: Option<(DVec3, f64)>,
+}
+
+/// A point sampled on an area light, as seen from a shading point.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct LightSample {
+    /// The light's unnormalized world normal there (`m⁻ᵀ·n_obj`, as hits report it).
+    pub n_world: Vec3,
+    /// Unit direction from the shading point to `q`, and the distance.
+    pub wi: DVec3,
+    pub dist: f64,
+    /// Solid-angle density of having sampled `wi` (0: nothing to sample, such as the
+    /// back of a rectangle).
+    pub pdf: f64,
+}
+
+/// Whether the linear part `m` of a transform is a similarity: orthogonal columns of one
+/// length, to a relative 1e-5 (a rotation and a uniform scale in f32 are that, to
+/// rounding). Returns the scale.
+fn similarity_scale(m: &glam::Mat3) -> Option<f64> {
+    let c = [m.x_axis, m.y_axis, m.z_axis].map(crate::real::dvec3);
+    let s2 = c[0].length_squared();
+    let tol = 1e-5 * s2;
+    let ok = (c[1].length_squared() - s2).abs() <= tol
+        && (c[2].length_squared() - s2).abs() <= tol
+        && c[0].dot(c[1]).abs() <= tol
+        && c[0].dot(c[2]).abs() <= tol
+        && c[1].dot(c[2]).abs() <= tol;
+    (ok && s2 > 0.0 && s2.is_finite()).then(|| s2.sqrt())
+}
+
+/// An orthonormal frame `(t, b)` completing unit `n` (Duff et al. 2017).
+fn frame(n: DVec3) -> (DVec3, DVec3) {
+    let s = if n.z < 0.0 { -1.0 } else { 1.0 };
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    (
+        DVec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x),
+        DVec3::new(b, s + n.y * n.y * a, -n.y),
+    )
 }
 
 impl AreaLight {
     /// The area light of an emissive instance (a sphere or a rectangle).
     pub fn new(inst: &Instance, radiance: Color) -> Self {
         let det = inst.xf.map_or(1.0, |x| x.matrix().determinant().abs());
+        let ball = match (&inst.shape, &inst.xf) {
+            (Shape::Sphere, None) => Some((DVec3::ZERO, 1.0)),
+            (Shape::Sphere, Some(x)) => {
+                similarity_scale(&x.matrix()).map(|r| (crate::real::dvec3(x.translation()), r))
+            }
+            _ => None,
+        };
         AreaLight {
             shape: inst.shape.clone(),
             xf: inst.xf,
             radiance,
             det,
+            ball,
         }
+    }
+
+    /// The cone of directions the sphere subtends from `p`, when it is sampled by solid
+    /// angle and `p` lies outside it: the unit axis from `p` towards the centre, the
+    /// distance to the centre, and 1 − cos θ_max (from sin²θ_max without cancellation).
+    #[inline]
+    fn cone(&self, p: DVec3) -> Option<(DVec3, f64, f64)> {
+        let (c, r) = self.ball?;
+        let to = c - p;
+        let d2 = to.length_squared();
+        // Outside, with Mitsuba's margin (a point on the light itself is inside).
+        if !(d2 > (r * (1.0 - 1e-4)).powi(2)) {
+            return None;
+        }
+        let d = d2.sqrt();
+        let sin2 = (r * r / d2).min(1.0);
+        let one_minus_cos = sin2 / (1.0 + (1.0 - sin2).sqrt());
+        (one_minus_cos > 0.0).then_some((to / d, d, one_minus_cos))
+    }
+
+    /// Samples a point of the light as seen from `p`: a sphere placed by a similarity,
+    /// with `p` outside it, by the cone of directions it subtends (uniform in that solid
+    /// angle; Mitsuba 3's `sphere::sample_direction`, after Akalin's "Sampling the visible
+    /// sphere"); anything else uniformly by area ([`AreaLight::sample`]), with the density
+    /// converted to solid angle. Uses one 2D sample either way.
+    pub(crate) fn sample_from(&self, p: DVec3, u: (f64, f64)) -> LightSample {
+        if let Some((axis, d, one_minus_cos_max)) = self.cone(p) {
+            let (c, r) = self.ball.expect("a cone comes from a ball");
+            // cos θ uniform in [cos θ_max, 1]; sin²θ from 1 − cos θ without cancellation.
+            let omc = u.0 * one_minus_cos_max;
+            let sin2 = (omc * (2.0 - omc)).max(0.0);
+            let cos_t = 1.0 - omc;
+            // The angle at the centre between the axis (towards p) and the point where
+            // the sampled direction first meets the sphere.
+            let cos_a = sin2 * d / r + cos_t * (1.0 - sin2 * d * d / (r * r)).max(0.0).sqrt();
+            let cos_a = cos_a.clamp(-1.0, 1.0);
+            let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
+            let phi = 2.0 * PI * u.1;
+            let (t, b) = frame(-axis);
+            let n = (t * phi.cos() + b * phi.sin()) * sin_a - axis * cos_a;
+            let q = c + n * r;
+            let to = q - p;
+            let dist = to.length();
+            // The normal's direction (hits report m⁻ᵀ·n_obj, which for a similarity of
+            // scale r is this over r; only its direction is used).
+            return LightSample {
+                n_world: crate::real::vec3(n),
+                wi: to / dist,
+                dist,
+                pdf: 1.0 / (2.0 * PI * one_minus_cos_max),
+            };
+        }
+        let (q, n_world) = self.sample(u);
+        let to = crate::real::dvec3(q) - p;
+        let d2 = to.length_squared();
+        let dist = d2.sqrt();
+        let wi = to / dist;
+        let cos_l = crate::real::dvec3(n_world).normalize().dot(-wi);
+        let pdf = if cos_l > 0.0 {
+            self.pdf_area(n_world) as f64 * d2 / cos_l
+        } else {
+            0.0
+        };
+        LightSample {
+            n_world,
+            wi,
+            dist,
+            pdf,
+        }
+    }
+
+    /// The solid-angle density with which [`AreaLight::sample_from`] at `p` would give
+    /// the direction `wi` that meets the light at distance `dist`, where its world normal
+    /// is `n_world` (unnormalized).
+    pub(crate) fn pdf_from(&self, p: DVec3, wi: DVec3, dist: f64, n_world: Vec3) -> f64 {
+        if let Some((_, _, one_minus_cos_max)) = self.cone(p) {
+            return 1.0 / (2.0 * PI * one_minus_cos_max);
+        }
+        let cos = crate::real::dvec3(n_world).normalize().dot(-wi).abs();
+        if cos <= 0.0 {
+            return 0.0;
+        }
+        self.pdf_area(n_world) as f64 * dist * dist / cos
     }
 
     /// Surface area of the canonical shape.

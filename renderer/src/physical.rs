@@ -234,8 +234,8 @@ impl<'a> PhysicalIntegrator<'a> {
     }
 
     /// Solid-angle density of light sampling having produced the emitter hit `s`, seen
-    /// from `from` along `dir` at distance `t`.
-    fn light_pdf_at(&self, s: &Surface, dir: glam::DVec3, dist: f64) -> f64 {
+    /// from `from` along the unit `dir` at distance `dist`.
+    fn light_pdf_at(&self, s: &Surface, from: glam::DVec3, dir: glam::DVec3, dist: f64) -> f64 {
         let Some(&k) = self.scene.area_light_of.get(s.object_id as usize) else {
             return 0.0;
         };
@@ -243,11 +243,7 @@ impl<'a> PhysicalIntegrator<'a> {
             return 0.0;
         }
         let light = &self.scene.area_lights[k as usize];
-        let cos = s.ng.dot(-dir).abs();
-        if cos <= 0.0 {
-            return 0.0;
-        }
-        light.pdf_area(s.n_world) as f64 * dist * dist / cos
+        light.pdf_from(from, dir, dist, s.n_world)
     }
 
     fn occluded(&self, s: &Surface, dir: glam::DVec3, dist: f64) -> bool {
@@ -310,23 +306,19 @@ impl<'a> PhysicalIntegrator<'a> {
             }
         }
         for light in &self.scene.area_lights {
-            let (q, n_world) = light.sample(smp.next_2d());
-            let to = dv(q) - p;
-            let d2 = to.length_squared();
-            let dist = d2.sqrt();
-            let wi = to / dist;
-            let nl = dv(n_world).normalize();
-            let cos_l = nl.dot(-wi);
-            if cos_l <= 0.0 {
-                continue; // The back of the light does not emit.
-            }
-            let pdf_l = light.pdf_area(n_world) as f64 * d2 / cos_l;
-            let (f, pdf_b) = self.eval_light(s, wo, wi);
-            if f == glam::DVec3::ZERO || !pdf_l.is_finite() {
+            let ls = light.sample_from(p, smp.next_2d());
+            // The back of the light does not emit.
+            if !(ls.pdf > 0.0 && ls.pdf.is_finite())
+                || dv(ls.n_world).normalize().dot(-ls.wi) <= 0.0
+            {
                 continue;
             }
-            if !self.occluded(s, wi, dist) {
-                sum += f * rgb(light.radiance) * (mis(pdf_l, pdf_b) / pdf_l);
+            let (f, pdf_b) = self.eval_light(s, wo, ls.wi);
+            if f == glam::DVec3::ZERO {
+                continue;
+            }
+            if !self.occluded(s, ls.wi, ls.dist) {
+                sum += f * rgb(light.radiance) * (mis(ls.pdf, pdf_b) / ls.pdf);
             }
         }
         sum
@@ -378,7 +370,7 @@ impl<'a> PhysicalIntegrator<'a> {
             if le != glam::DVec3::ZERO {
                 let dist = (dv(hit.p) - dv(ray.o)).length();
                 let w = if prev_pdf > 0.0 {
-                    mis(prev_pdf, self.light_pdf_at(&s, dir, dist))
+                    mis(prev_pdf, self.light_pdf_at(&s, dv(ray.o), dir, dist))
                 } else {
                     1.0
                 };
