@@ -97,6 +97,10 @@ enum Cmd {
 }
 
 fn main() -> ExitCode {
+    if let Err(e) = renderer::check_cpu() {
+        eprintln!("error: {e}");
+        return ExitCode::from(2);
+    }
     match run() {
         Ok(code) => code,
         Err(e) => {

@@ -92,6 +92,41 @@ impl Shape {
         }
     }
 
+    /// [`Shape::intersect`] as the search for a closest hit needs it: a record that
+    /// [`Shape::complete`] finishes once the search has a winner (a sphere leaves out its
+    /// uv, which costs an `acos` and an `atan2`, for every candidate that loses).
+    #[inline]
+    fn candidate(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+        match self {
+            Shape::Sphere => shapes::sphere::intersect_bare(ray, t_min, t_max),
+            _ => self.intersect(ray, t_min, t_max),
+        }
+    }
+
+    /// [`Shape::intersect_batch`] as candidates ([`Shape::candidate`]).
+    fn candidate_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real], out: &mut [Option<Hit>]) {
+        match self {
+            Shape::Mesh(_) | Shape::Group(_) => self.intersect_batch(rays, t_min, t_max, out),
+            _ => {
+                for ((r, &tm), o) in rays.iter().zip(t_max).zip(out.iter_mut()) {
+                    *o = self.candidate(r, t_min, tm);
+                }
+            }
+        }
+    }
+
+    /// Completes a [`Shape::candidate`] record in object space: then it has the bits
+    /// [`Shape::intersect`] gives.
+    /// Without `UV` the uv stays as the candidate left it (for the renderer's own
+    /// integrators, which never read it; see [`Aggregate::intersect_for_shading`]).
+    #[inline]
+    fn complete<const UV: bool>(&self, mut h: Hit) -> Hit {
+        if let (true, Shape::Sphere) = (UV, self) {
+            h.uv = shapes::sphere::uv(h.p);
+        }
+        h
+    }
+
     /// [`Shape::intersect`] for up to [`BATCH`] rays, each with its own `t_max`: meshes
     /// and definitions walk their trees with the rays together; other shapes take them
     /// one by one. Each result is exactly `intersect`'s.
@@ -104,7 +139,7 @@ impl Shape {
     ) {
         match self {
             Shape::Mesh(m) => m.intersect_batch(rays, t_min, t_max, out),
-            Shape::Group(g) => g.intersect_batch(rays, t_min, t_max, out),
+            Shape::Group(g) => g.intersect_batch::<true>(rays, t_min, t_max, out),
             _ => {
                 for ((r, &tm), o) in rays.iter().zip(t_max).zip(out.iter_mut()) {
                     *o = self.intersect(r, t_min, tm);
@@ -117,6 +152,8 @@ impl Shape {
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
         match self {
+            Shape::Sphere => shapes::sphere::hits(ray, t_min, t_max),
+            Shape::Plane => shapes::flat::plane_hits(ray, t_min, t_max),
             Shape::Mesh(m) => m.occluded(ray, t_min, t_max),
             Shape::Group(g) => g.occluded(ray, t_min, t_max),
             _ => self.intersect(ray, t_min, t_max).is_some(),
@@ -172,15 +209,16 @@ impl Instance {
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         let h = self.local_hit(ray, t_min, t_max)?;
-        Some(self.finish(h))
+        Some(self.finish::<true>(h))
     }
 
-    /// Closest hit in object space (`t` is the same in both spaces).
+    /// Closest hit in object space (`t` is the same in both spaces), as a candidate that
+    /// [`Instance::finish`] completes ([`Shape::candidate`]).
     #[inline]
     fn local_hit(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         match &self.xf {
-            Some(x) => self.shape.intersect(&x.inv_ray(ray), t_min, t_max),
-            None => self.shape.intersect(ray, t_min, t_max),
+            Some(x) => self.shape.candidate(&x.inv_ray(ray), t_min, t_max),
+            None => self.shape.candidate(ray, t_min, t_max),
         }
     }
 
@@ -194,16 +232,17 @@ impl Instance {
                     *l = x.inv_ray(r);
                 }
                 self.shape
-                    .intersect_batch(&local[..rays.len()], t_min, t_max, out)
+                    .candidate_batch(&local[..rays.len()], t_min, t_max, out)
             }
-            None => self.shape.intersect_batch(rays, t_min, t_max, out),
+            None => self.shape.candidate_batch(rays, t_min, t_max, out),
         }
     }
 
     /// Maps an object-space hit of [`Instance::local_hit`] to the outer space and fills in
     /// the material and object id it inherits.
     #[inline]
-    fn finish(&self, mut h: Hit) -> Hit {
+    fn finish<const UV: bool>(&self, h: Hit) -> Hit {
+        let mut h = self.shape.complete::<UV>(h);
         if let Some(x) = &self.xf {
             (h.p, h.err) = x.point_with_error(h.p, h.err);
             h.n_geo = x.normal(h.n_geo);
@@ -289,7 +328,8 @@ impl Lead {
 
     /// [`Instance::finish`] for the instance this lead stands for.
     #[inline]
-    fn finish(&self, mut h: Hit) -> Hit {
+    fn finish<const UV: bool>(&self, h: Hit) -> Hit {
+        let mut h = Shape::Sphere.complete::<UV>(h);
         let m = Mat3::from_diagonal(Vec3::splat(self.r));
         let inv = Mat3::from_diagonal(Vec3::splat(self.s));
         (h.p, h.err) = map_point_with_error(&m, self.c, h.p, h.err);
@@ -403,7 +443,7 @@ impl Aggregate {
     fn local_hit(&self, k: usize, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         let lead = &self.leads[k];
         if lead.s != 0.0 {
-            Shape::Sphere.intersect(&lead.object_ray(ray), t_min, t_max)
+            shapes::sphere::intersect_bare(&lead.object_ray(ray), t_min, t_max)
         } else {
             self.instances[k].local_hit(ray, t_min, t_max)
         }
@@ -412,11 +452,23 @@ impl Aggregate {
     /// Closest hit with `t_min < t < t_max`. The search keeps the winner in its object
     /// space and maps only the final hit to this space.
     pub fn intersect(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+        self.intersect_with::<true>(ray, t_min, t_max)
+    }
+
+    /// [`Aggregate::intersect`] for the renderer's integrators, which read no uv: the
+    /// record is the same but for `uv`, which is left unset (0) where computing it costs
+    /// (a sphere's takes an `acos` and an `atan2`).
+    pub fn intersect_for_shading(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+        self.intersect_with::<false>(ray, t_min, t_max)
+    }
+
+    #[inline]
+    fn intersect_with<const UV: bool>(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         let (mut best, t_max) = self.nearest_unbounded(ray, t_min, t_max);
         self.bvh.traverse(ray, t_min, t_max, false, |k, tmax| {
             self.visit(k, ray, t_min, tmax, &mut best)
         });
-        best.map(|(k, h)| self.finish(k, h))
+        best.map(|(k, h)| self.finish::<UV>(k, h))
     }
 
     /// The closest hit among the unbounded instances, with the interval it leaves for
@@ -468,12 +520,32 @@ impl Aggregate {
     pub fn intersect_many(&self, rays: &[Ray], t_min: Real, t_max: Real, out: &mut [Option<Hit>]) {
         assert_eq!(rays.len(), out.len(), "one output per ray");
         for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
-            self.intersect_batch(rays, t_min, &[t_max; BATCH][..rays.len()], out);
+            self.intersect_batch::<true>(rays, t_min, &[t_max; BATCH][..rays.len()], out);
+        }
+    }
+
+    /// [`Aggregate::intersect_many`] without uv, as [`Aggregate::intersect_for_shading`].
+    pub fn intersect_many_for_shading(
+        &self,
+        rays: &[Ray],
+        t_min: Real,
+        t_max: Real,
+        out: &mut [Option<Hit>],
+    ) {
+        assert_eq!(rays.len(), out.len(), "one output per ray");
+        for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
+            self.intersect_batch::<false>(rays, t_min, &[t_max; BATCH][..rays.len()], out);
         }
     }
 
     /// [`Aggregate::intersect_many`] for up to [`BATCH`] rays, each with its own `t_max`.
-    fn intersect_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real], out: &mut [Option<Hit>]) {
+    fn intersect_batch<const UV: bool>(
+        &self,
+        rays: &[Ray],
+        t_min: Real,
+        t_max: &[Real],
+        out: &mut [Option<Hit>],
+    ) {
         if self.bounded() == 1 && self.leads[0].s == 0.0 {
             // One bounded instance (a mesh, a definition): its own tree is the one to
             // walk rays together through, which the instance's batch does. (The single
@@ -482,7 +554,7 @@ impl Aggregate {
             if self.unbounded().is_empty() {
                 self.instances[0].local_hit_batch(rays, t_min, t_max, out);
                 for o in out.iter_mut() {
-                    *o = o.map(|h| self.finish(0, h));
+                    *o = o.map(|h| self.finish::<UV>(0, h));
                 }
                 return;
             }
@@ -494,8 +566,8 @@ impl Aggregate {
             self.instances[0].local_hit_batch(rays, t_min, &bound[..rays.len()], out);
             for (o, u) in out.iter_mut().zip(unbounded) {
                 *o = match (o.take(), u) {
-                    (Some(h), _) => Some(self.finish(0, h)),
-                    (None, Some((k, h))) => Some(self.finish(k, h)),
+                    (Some(h), _) => Some(self.finish::<UV>(0, h)),
+                    (None, Some((k, h))) => Some(self.finish::<UV>(k, h)),
                     (None, None) => None,
                 };
             }
@@ -525,7 +597,7 @@ impl Aggregate {
             }
         }
         for (o, b) in out.iter_mut().zip(best) {
-            *o = b.map(|(k, h)| self.finish(k, h));
+            *o = b.map(|(k, h)| self.finish::<UV>(k, h));
         }
     }
 
@@ -538,10 +610,10 @@ impl Aggregate {
     /// Maps the winner of a search, bounded instance or not, to this space, and numbers
     /// its surface.
     #[inline]
-    fn finish(&self, k: usize, h: Hit) -> Hit {
+    fn finish<const UV: bool>(&self, k: usize, h: Hit) -> Hit {
         let mut h = match self.leads.get(k) {
-            Some(lead) if lead.s != 0.0 => lead.finish(h),
-            _ => self.instances[k].finish(h),
+            Some(lead) if lead.s != 0.0 => lead.finish::<UV>(h),
+            _ => self.instances[k].finish::<UV>(h),
         };
         h.surface = h.surface.wrapping_add(self.surface_offset(k));
         h
@@ -560,7 +632,7 @@ impl Aggregate {
             && self.bvh.traverse(ray, t_min, t_max, true, |k, tmax| {
                 let lead = &self.leads[k as usize];
                 let occluded = if lead.s != 0.0 {
-                    Shape::Sphere.occluded(&lead.object_ray(ray), t_min, tmax)
+                    shapes::sphere::hits(&lead.object_ray(ray), t_min, tmax)
                 } else {
                     self.instances[k as usize].occluded(ray, t_min, tmax)
                 };

@@ -85,7 +85,7 @@ fn similarity_scale(m: &glam::Mat3) -> Option<f64> {
 }
 
 /// An orthonormal frame `(t, b)` completing unit `n` (Duff et al. 2017).
-fn frame(n: DVec3) -> (DVec3, DVec3) {
+pub(crate) fn frame(n: DVec3) -> (DVec3, DVec3) {
     let s = if n.z < 0.0 { -1.0 } else { 1.0 };
     let a = -1.0 / (s + n.z);
     let b = n.x * n.y * a;

@@ -79,6 +79,10 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 fn main() -> ExitCode {
+    if let Err(e) = renderer::check_cpu() {
+        eprintln!("error: {e}");
+        return ExitCode::from(2);
+    }
     // SIGINT and SIGTERM: remove any temp file an interrupted write left, then exit with
     // the shell's code for an interrupt. An existing output is never touched.
     let _ = ctrlc::set_handler(|| {

@@ -14,6 +14,7 @@
 //!   roulette from `rr_depth`).
 
 use crate::hit::Hit;
+use crate::light::frame;
 use crate::ray::Ray;
 use crate::real::{Real, Vec3};
 use crate::sampler::PixelSampler;
@@ -65,16 +66,6 @@ fn rgb(c: Color) -> glam::DVec3 {
     glam::DVec3::new(c.x as f64, c.y as f64, c.z as f64)
 }
 
-/// A local frame around unit `n`.
-fn frame(n: glam::DVec3) -> (glam::DVec3, glam::DVec3) {
-    let s = if n.z < 0.0 { -1.0 } else { 1.0 };
-    let a = -1.0 / (s + n.z);
-    let b = n.x * n.y * a;
-    (
-        glam::DVec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x),
-        glam::DVec3::new(b, s + n.y * n.y * a, -n.y),
-    )
-}
 
 /// A sampled BSDF direction.
 struct BsdfSample {
@@ -353,7 +344,11 @@ impl<'a> PhysicalIntegrator<'a> {
         let mut depth = 0u32;
         loop {
             let dir = dv(ray.d).normalize();
-            let Some(hit) = self.scene.root.intersect(&ray, t_min, Real::INFINITY) else {
+            let Some(hit) = self
+                .scene
+                .root
+                .intersect_for_shading(&ray, t_min, Real::INFINITY)
+            else {
                 if let Some(env) = self.env {
                     let w = if prev_pdf > 0.0 {
                         mis(prev_pdf, 1.0 / (4.0 * PI))

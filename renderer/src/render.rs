@@ -154,9 +154,12 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
                     samplers[k] = Some(smp);
                 }
                 if classic {
-                    scene
-                        .root
-                        .intersect_many(&rays[..n], 0.0, Real::INFINITY, &mut hits[..n]);
+                    scene.root.intersect_many_for_shading(
+                        &rays[..n],
+                        0.0,
+                        Real::INFINITY,
+                        &mut hits[..n],
+                    );
                 }
                 for k in 0..n {
                     let (i, s) = pixel_sample(start + k);
@@ -238,9 +241,12 @@ fn fill_aov(scene: &Scene, a: &mut Aov, w: usize) {
                     for (m, ray) in rays[..n].iter_mut().enumerate() {
                         *ray = scene.camera.pixel_ray((i + m) as u32, j as u32);
                     }
-                    scene
-                        .root
-                        .intersect_many(&rays[..n], 0.0, Real::INFINITY, &mut hits[..n]);
+                    scene.root.intersect_many_for_shading(
+                        &rays[..n],
+                        0.0,
+                        Real::INFINITY,
+                        &mut hits[..n],
+                    );
                 }
                 let Some(hit) = hits[k] else {
                     continue;

@@ -104,7 +104,12 @@ impl<'a> Shader<'a> {
 
     /// Radiance along a camera ray.
     pub fn trace_primary(&self, ray: &Ray) -> Color {
-        self.trace_primary_hit(ray, self.scene.root.intersect(ray, 0.0, Real::INFINITY))
+        self.trace_primary_hit(
+            ray,
+            self.scene
+                .root
+                .intersect_for_shading(ray, 0.0, Real::INFINITY),
+        )
     }
 
     /// [`Shader::trace_primary`] given the ray's closest hit (from
@@ -132,7 +137,11 @@ impl<'a> Shader<'a> {
         if self.cut_off(level, weight) {
             return Color::ZERO;
         }
-        match self.scene.root.intersect(ray, t_min, Real::INFINITY) {
+        match self
+            .scene
+            .root
+            .intersect_for_shading(ray, t_min, Real::INFINITY)
+        {
             None => self.scene.settings.background,
             Some(hit) => self.shade(ray, &hit, level, weight, interiors),
         }
@@ -303,7 +312,11 @@ impl<'a> Shader<'a> {
         let mut filter = Color::ONE;
         // Follow the shadow ray through transparent blockers (bounded, allocation-free).
         for _ in 0..64 {
-            let Some(hit) = self.scene.root.intersect(&ray, t_min, remaining) else {
+            let Some(hit) = self
+                .scene
+                .root
+                .intersect_for_shading(&ray, t_min, remaining)
+            else {
                 return filter;
             };
             let m = self.scene.material(hit.material);

@@ -202,20 +202,17 @@ transform = [{ scale = 0.5 }, { translate = [0, -0.5, 0] }]
     let _ = SamplerKind::Sobol;
 }
 
-/// A diffuse plane (reflectance ρ) under a square light of half-side a and radiance L at
-/// height h, facing down: straight below its centre the form factor to the square is four
-/// times that to an a × a rectangle seen from below its corner,
-/// F = 4 · (1/2π) · 2 · A/√(1+A²) · atan(A/√(1+A²)) with A = a/h, and the plane's radiance
-/// there is ρ·L·F. The light subtends a wide cone (a = h), so both strategies of multiple
-/// importance sampling, light samples and BSDF samples that hit the light, carry much of
-/// the estimate, and a wrong density or weight in either biases it. The camera looks at the
-/// point from the side through a tiny window (it cannot see the light); the light's upper
-/// side is black, so `path` has nothing to add to `direct`.
-#[test]
-fn test04_square_light_over_a_plane() {
-    let text = r#"
+/// A diffuse floor (reflectance 0.5) at y = 0 under an emitter of radiance (4, 2, 1)
+/// given by `light` (a TOML object table), seen at the origin from the side through a
+/// tiny window (the camera at `from` cannot see the light; the light is black, so `path`
+/// has nothing to add to `direct`). Renders it with each integrator at 16,384 spp and
+/// checks each channel's mean against `0.5 · radiance · factor` (z < 5), then hands the
+/// image to `more` (integrator, image, the expected red).
+fn light_over_a_plane(from: &str, light: &str, factor: f64, more: impl Fn(&str, &Image, f64)) {
+    let text = format!(
+        r#"
 [camera.look_at]
-from = [4, 1, 0.5]
+from = {from}
 at = [0, 0, 0]
 up = [0, 1, 0]
 fov = 0.001
@@ -235,28 +232,48 @@ radiance = [4, 2, 1]
 type = "plane"
 material = "floor"
 [[objects]]
-type = "rectangle"
 material = "light"
-transform = [{ rotate = { axis = [1, 0, 0], degrees = 180 } }, { translate = [0, 1, 0] }]
-"#;
-    let a = 1.0f64 / (1.0f64 + 1.0).sqrt();
-    let form_factor = 4.0 / std::f64::consts::PI * a * a.atan();
+{light}
+"#
+    );
     for integrator in ["direct", "path"] {
         let s = scene(&text.replace("INTEGRATOR", integrator));
         let spp = 16384;
         let img = run(&s, spp);
         for (c, radiance) in [4.0, 2.0, 1.0].into_iter().enumerate() {
-            let want = 0.5 * radiance * form_factor;
+            let want = 0.5 * radiance * factor;
             let (mean, se) = mean_and_error(&img, spp, &[0, 1, 2, 3], c);
             let z = (mean - want) / se.max(1e-12);
             assert!(
                 z.abs() < 5.0,
                 "{integrator}, channel {c}: {mean} vs the closed form {want} (z = {z:.1}, \
-                 standard error {se:.2e}); see the area-light sampling and MIS weights in \
+                 standard error {se:.2e}); see the area-light sampling (AreaLight::sample_from \
+                 and pdf_from in renderer/src/light.rs) and the MIS weights in \
                  renderer/src/physical.rs"
             );
         }
+        more(integrator, &img, 0.5 * 4.0 * factor);
     }
+}
+
+/// A diffuse plane (reflectance ρ) under a square light of half-side a and radiance L at
+/// height h, facing down: straight below its centre the form factor to the square is four
+/// times that to an a × a rectangle seen from below its corner,
+/// F = 4 · (1/2π) · 2 · A/√(1+A²) · atan(A/√(1+A²)) with A = a/h, and the plane's radiance
+/// there is ρ·L·F. The light subtends a wide cone (a = h), so both strategies of multiple
+/// importance sampling, light samples and BSDF samples that hit the light, carry much of
+/// the estimate, and a wrong density or weight in either biases it.
+#[test]
+fn test04_square_light_over_a_plane() {
+    let a = 1.0f64 / (1.0f64 + 1.0).sqrt();
+    let form_factor = 4.0 / std::f64::consts::PI * a * a.atan();
+    light_over_a_plane(
+        "[4, 1, 0.5]",
+        r#"type = "rectangle"
+transform = [{ rotate = { axis = [1, 0, 0], degrees = 180 } }, { translate = [0, 1, 0] }]"#,
+        form_factor,
+        |_, _, _| {},
+    );
 }
 
 /// A diffuse plane (reflectance ρ) under a sphere light of radius R and radiance L whose
@@ -270,58 +287,23 @@ transform = [{ rotate = { axis = [1, 0, 0], degrees = 180 } }, { translate = [0,
 /// is that of cone sampling (measured 0.24 of the mean with the cone, 0.75 by area).
 #[test]
 fn test05_sphere_light_over_a_plane() {
-    let text = r#"
-[camera.look_at]
-from = [4, 0.5, 0.5]
-at = [0, 0, 0]
-up = [0, 1, 0]
-fov = 0.001
-[render]
-width = 2
-height = 2
-integrator = "INTEGRATOR"
-max_depth = 4
-[materials.floor]
-model = "diffuse"
-color = [0.5, 0.5, 0.5]
-[materials.light]
-model = "diffuse"
-color = [0, 0, 0]
-radiance = [4, 2, 1]
-[[objects]]
-type = "plane"
-material = "floor"
-[[objects]]
-type = "sphere"
-material = "light"
-transform = [{ scale = 0.8 }, { rotate = { axis = [1, 2, 3], degrees = 40 } }, { translate = [0, 1, 0] }]
-"#;
-    let sin2 = 0.8f64 * 0.8;
-    for integrator in ["direct", "path"] {
-        let s = scene(&text.replace("INTEGRATOR", integrator));
-        let spp = 16384;
-        let img = run(&s, spp);
-        let m = img.moments.as_ref().expect("moments");
-        for (c, radiance) in [4.0, 2.0, 1.0].into_iter().enumerate() {
-            let want = 0.5 * radiance * sin2;
-            let (mean, se) = mean_and_error(&img, spp, &[0, 1, 2, 3], c);
-            let z = (mean - want) / se.max(1e-12);
-            assert!(
-                z.abs() < 5.0,
-                "{integrator}, channel {c}: {mean} vs the closed form {want} (z = {z:.1}, \
-                 standard error {se:.2e}); see AreaLight::sample_from and pdf_from in \
-                 renderer/src/light.rs and the MIS weights in renderer/src/physical.rs"
-            );
-            // The per-sample standard deviation, relative to the mean, of pixel 0.
-            let sd = (m[c] as f64 - (img.rgb[c] as f64).powi(2)).max(0.0).sqrt() / want;
-            eprintln!("measured: {integrator}, channel {c}: per-sample sd {sd:.3} of the mean");
+    light_over_a_plane(
+        "[4, 0.5, 0.5]",
+        r#"type = "sphere"
+transform = [{ scale = 0.8 }, { rotate = { axis = [1, 2, 3], degrees = 40 } }, { translate = [0, 1, 0] }]"#,
+        0.8 * 0.8,
+        |integrator, img, want| {
+            // The per-sample standard deviation of pixel 0's red, relative to its mean.
+            let m = img.moments.as_ref().expect("moments");
+            let sd = (m[0] as f64 - (img.rgb[0] as f64).powi(2)).max(0.0).sqrt() / want;
+            eprintln!("measured: {integrator}: per-sample sd {sd:.3} of the mean");
             assert!(
                 sd < 0.4,
-                "{integrator}, channel {c}: the per-sample standard deviation is {sd:.3} of \
-                 the mean, where sampling the sphere by the cone it subtends gives 0.24 \
-                 (by area: 0.75); is the sphere light sampled by solid angle? \
+                "{integrator}: the per-sample standard deviation is {sd:.3} of the mean, \
+                 where sampling the sphere by the cone it subtends gives 0.24 (by area: \
+                 0.75); is the sphere light sampled by solid angle? \
                  (AreaLight::sample_from, renderer/src/light.rs)"
             );
-        }
-    }
+        },
+    );
 }

@@ -23,6 +23,13 @@ fn plane_t(ray: &Ray, t_min: Real, t_max: Real) -> Option<Real> {
     (t > t_min && t < t_max).then_some(t)
 }
 
+/// Whether the ray hits the plane y = 0 with `t_min < t < t_max`: exactly when
+/// [`plane`] returns a hit.
+#[inline]
+pub fn plane_hits(ray: &Ray, t_min: Real, t_max: Real) -> bool {
+    plane_t(ray, t_min, t_max).is_some()
+}
+
 /// The plane y = 0; uv are the hit's x and z.
 #[inline]
 pub fn plane(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {

@@ -5,11 +5,13 @@
 use super::{azimuth, local_hit, stable_roots};
 use crate::hit::Hit;
 use crate::ray::Ray;
-use crate::real::{dvec3, gamma, vec3, Real, Vec2};
+use crate::real::{dvec3, gamma, vec3, Real, Vec2, Vec3};
+use glam::DVec3;
 
-/// Closest hit on the unit sphere. The normal is the hit point (outward).
-#[inline]
-pub fn intersect(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+/// The root of a ray's closest hit with `t_min < t < t_max`, and what the hit point is
+/// computed from: `(t, side, l, d, disc, a)` in the notation below.
+#[inline(always)]
+fn solve(ray: &Ray, t_min: Real, t_max: Real) -> Option<(Real, f64, DVec3, DVec3, f64, f64)> {
     // a, b, l and the discriminant in f64, in both builds. In f32 the products d·(b/a),
     // of size |o|, moved l by ε·|o|: rays within ~ε·|o| of the silhouette came out as
     // wrong hits or misses (up to 5e-3 of the radius at |o| = 1e5).
@@ -25,19 +27,48 @@ pub fn intersect(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     let (a, b) = (a64 as Real, b64 as Real);
     let c = ray.o.length_squared() - 1.0;
     let (t0, t1) = stable_roots(a, b, c, disc);
-    let (t, side) = if t0 > t_min && t0 < t_max {
-        (t0, -1.0)
+    if t0 > t_min && t0 < t_max {
+        Some((t0, -1.0, l, d, disc64, a64))
     } else if t1 > t_min && t1 < t_max {
-        (t1, 1.0)
+        Some((t1, 1.0, l, d, disc64, a64))
     } else {
-        return None;
-    };
+        None
+    }
+}
+
+/// Whether the ray hits the unit sphere with `t_min < t < t_max`: exactly when
+/// [`intersect`] returns a hit, without building it (shadow rays).
+#[inline]
+pub fn hits(ray: &Ray, t_min: Real, t_max: Real) -> bool {
+    solve(ray, t_min, t_max).is_some()
+}
+
+/// [`intersect`] without the uv (left at 0): the search for the closest hit builds this
+/// for every candidate, and [`uv`] completes the winner's record, from the same point,
+/// so the final record has the same bits (uv costs an `acos` and an `atan2`).
+#[inline]
+pub fn intersect_bare(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+    let (t, side, l, d, disc64, a64) = solve(ray, t_min, t_max)?;
     // The point as l ∓ d·√disc/a, not o + t·d, which cancels when |o| ≫ 1 (an instance
     // far away or flattened, seen in object space) down to p = 0 and a zero normal.
     // Then re-project onto the surface; the error of the result is γ(5)·|p| (pbrt).
     let p = vec3(l + d * (side * disc64.sqrt() / a64));
     let p = p.normalize_or(p);
     let err = p.abs() * gamma(5);
+    Some(local_hit(t, p, err, p, Vec2::ZERO))
+}
+
+/// The uv of the object-space point `p` on the unit sphere: azimuth and polar angle.
+#[inline]
+pub fn uv(p: Vec3) -> Vec2 {
     let v = 1.0 - p.y.clamp(-1.0, 1.0).acos() / (std::f64::consts::PI as Real);
-    Some(local_hit(t, p, err, p, Vec2::new(azimuth(p.x, p.z), v)))
+    Vec2::new(azimuth(p.x, p.z), v)
+}
+
+/// Closest hit on the unit sphere. The normal is the hit point (outward).
+#[inline]
+pub fn intersect(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+    let mut h = intersect_bare(ray, t_min, t_max)?;
+    h.uv = uv(h.p);
+    Some(h)
 }

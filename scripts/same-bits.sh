@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Checks that a change did not change any result: renders every catalog and example scene
+# (EXR with every AOV, and at 7 spp with the scene's integrator) with the renderer built
+# from a base commit and from the working tree, and compares the files byte for byte.
+# Speed work that should not change a result (acceleration never does; ARCHITECTURE.md)
+# runs this before it is committed.
+#
+#   scripts/same-bits.sh [BASE]        BASE defaults to HEAD (the last commit)
+#
+# The base is built in a worktree under ${CARGO_TARGET_DIR:-target}/same-bits/ (its own
+# target directory, kept between runs); the renders go there too. Exits 1 and names the
+# scenes whose output differs.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+case "${1:-}" in -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0;; esac
+base="$(git rev-parse "${1:-HEAD}")"
+root="$PWD"
+target="${CARGO_TARGET_DIR:-$root/target}"
+work="$target/same-bits"
+mkdir -p "$work"
+if ! git -C "$work/src" rev-parse --git-dir >/dev/null 2>&1; then
+    rm -rf "$work/src"
+    git worktree prune
+    git worktree add --detach "$work/src" "$base" >/dev/null
+fi
+git -C "$work/src" checkout -q --detach "$base"
+echo "building the base ($base) and the working tree" >&2
+(cd "$work/src" && CARGO_TARGET_DIR="$work/target" cargo build -q --release -p renderer)
+cargo build -q --release -p renderer
+old="$work/target/release/renderer"
+new="$target/release/renderer"
+rm -rf "$work/old" "$work/new"
+mkdir -p "$work/old" "$work/new"
+differ=()
+n=0
+while IFS= read -r scene; do
+    name="$(echo "${scene#./}" | tr '/' '_')"
+    for spp in 1 7; do
+        for side in old new; do
+            bin="$old"; [ "$side" = new ] && bin="$new"
+            if ! "$bin" render "$scene" -o "$work/$side/$name.$spp.exr" --aov --spp "$spp" \
+                --threads 2 >/dev/null 2>&1; then
+                differ+=("$scene ($spp spp): the $side renderer failed")
+            fi
+        done
+        if ! cmp -s "$work/old/$name.$spp.exr" "$work/new/$name.$spp.exr"; then
+            differ+=("$scene ($spp spp)")
+        fi
+    done
+    n=$((n + 1))
+done < <(find conformance/scenes renderer/scenes -name '*.toml' | sort)
+if [ "${#differ[@]}" -gt 0 ]; then
+    echo "DIFFERENT from $base in ${#differ[@]} of $((2 * n)) renders:" >&2
+    printf '  %s\n' "${differ[@]}" >&2
+    exit 1
+fi
+echo "same bits: $n scenes at 1 and 7 spp (EXR with AOVs), base $base" >&2
