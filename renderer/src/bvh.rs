@@ -515,14 +515,28 @@ impl Walk {
                 // first, so they pop nearest first. Ties keep lane order (a stable
                 // order), so the result never depends on anything else. One and two
                 // lanes, the common cases, take no loop.
+                //
+                // A search for any hit (a shadow ray) may take the lanes in any order, and
+                // takes leaves first: a leaf is one test that can end the search, where a
+                // node is a descent. (Large primitives, such as a ground quad, sit in
+                // leaves near the root; a shadow ray that crosses one needs nothing else.)
+                // The stack keeps each lane's entry distance either way.
                 let near = near.to_array();
+                let mut key = near;
+                if any {
+                    for (k, c) in key.iter_mut().zip(n.count) {
+                        if c > 0 {
+                            *k = Real::NEG_INFINITY;
+                        }
+                    }
+                }
                 let first = mask.trailing_zeros() as usize;
                 let rest = mask & (mask - 1);
                 let next = if rest == 0 {
                     first
                 } else if rest & (rest - 1) == 0 {
                     let second = rest.trailing_zeros() as usize;
-                    let (a, b) = if near[second] < near[first] {
+                    let (a, b) = if key[second] < key[first] {
                         (second, first)
                     } else {
                         (first, second)
@@ -537,7 +551,7 @@ impl Walk {
                         let lane = m.trailing_zeros() as usize;
                         m &= m - 1;
                         let mut j = k;
-                        while j > 0 && near[lanes[j - 1]] > near[lane] {
+                        while j > 0 && key[lanes[j - 1]] > key[lane] {
                             lanes[j] = lanes[j - 1];
                             j -= 1;
                         }
