@@ -72,7 +72,7 @@ pub(crate) struct LightSample {
 /// Whether the linear part `m` of a transform is a similarity: orthogonal columns of one
 /// length, to a relative 1e-5 (a rotation and a uniform scale in f32 are that, to
 /// rounding). Returns the scale.
-fn similarity_scale(m: &glam::Mat3) -> Option<f64> {
+fn similarity_scale(m: &crate::real::Mat3) -> Option<f64> {
     let c = [m.x_axis, m.y_axis, m.z_axis].map(crate::real::dvec3);
     let s2 = c[0].length_squared();
     let tol = 1e-5 * s2;
@@ -156,6 +156,16 @@ impl AreaLight {
             let q = c + n * r;
             let to = q - p;
             let dist = to.length();
+            // A shading point on the light itself (its own surface seen from outside, as
+            // Mitsuba's margin allows) can draw the point it stands on: nothing to sample.
+            if !(dist > 0.0 && dist.is_finite()) {
+                return LightSample {
+                    n_world: Vec3::Y,
+                    wi: DVec3::Z,
+                    dist: 0.0,
+                    pdf: 0.0,
+                };
+            }
             // The normal's direction (hits report m⁻ᵀ·n_obj, which for a similarity of
             // scale r is this over r; only its direction is used).
             return LightSample {

@@ -66,7 +66,6 @@ fn rgb(c: Color) -> glam::DVec3 {
     glam::DVec3::new(c.x as f64, c.y as f64, c.z as f64)
 }
 
-
 /// A sampled BSDF direction.
 struct BsdfSample {
     dir: glam::DVec3,

@@ -405,9 +405,15 @@ mod tests {
                 }
             }
         }
-        // Worth something only if both kinds of ray hit often.
+        // Worth something only if both kinds of ray hit often, and (in f32, where the
+        // fallback is more precise than the render precision) if the fallback changes bits.
+        let needed = if crate::real::PRECISION == "f32" {
+            100
+        } else {
+            0
+        };
         assert!(
-            hits > 2000 && edge_hits > 1000 && differs > 100,
+            hits > 2000 && edge_hits > 1000 && differs >= needed,
             "{hits} hits, {edge_hits} on edges, {differs} where the fallback changes bits"
         );
     }
