@@ -118,7 +118,7 @@ pub fn build_with(
         )
     })?;
     check_precision(&table, &src)?;
-    let mut desc = format::parse_table(table).map_err(|(span, path, msg)| {
+    let mut desc = format::parse_table(table, text).map_err(|(span, path, msg)| {
         let field = if path.is_empty() || path == "." {
             "(syntax)".to_string()
         } else {

@@ -398,14 +398,28 @@ pub struct ShearDesc {
 pub fn parse(text: &str) -> Result<SceneDesc, (Option<std::ops::Range<usize>>, String, String)> {
     let table = toml::de::DeTable::parse(text)
         .map_err(|e| (e.span(), String::new(), e.message().to_string()))?;
-    parse_table(table)
+    parse_table(table, text)
 }
 
-/// [`parse`] from a document already parsed into TOML values (with their spans), so a
-/// caller that inspects the values first parses the text once.
+/// [`parse`] from a document already parsed into TOML values (with their spans) from
+/// `text`, so a caller that inspects the values first parses the text once.
+///
+/// The values are deserialized without tracking the field path first: the tracking wraps
+/// every value of the document and cost about half of loading a scene of 10,000 objects
+/// (renderer/docs/performance.md). Only when that fails is `text` parsed again and
+/// deserialized with the tracking, to name the field; the two differ in nothing else, so
+/// they fail alike.
 pub fn parse_table(
     table: toml::Spanned<toml::de::DeTable<'_>>,
+    text: &str,
 ) -> Result<SceneDesc, (Option<std::ops::Range<usize>>, String, String)> {
+    if let Ok(desc) =
+        <SceneDesc as serde::Deserialize>::deserialize(toml::Deserializer::from(table))
+    {
+        return Ok(desc);
+    }
+    let table = toml::de::DeTable::parse(text)
+        .map_err(|e| (e.span(), String::new(), e.message().to_string()))?;
     let de = toml::Deserializer::from(table);
     serde_path_to_error::deserialize(de).map_err(|e| {
         // `Spanned<T>` appears in the path as a private wrapper field; drop it.
