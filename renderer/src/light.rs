@@ -59,13 +59,11 @@ pub struct AreaLight {
 /// A point sampled on an area light, as seen from a shading point.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct LightSample {
-    /// The light's unnormalized world normal there (`m⁻ᵀ·n_obj`, as hits report it).
-    pub n_world: Vec3,
-    /// Unit direction from the shading point to `q`, and the distance.
+    /// Unit direction from the shading point to the sampled point, and the distance.
     pub wi: DVec3,
     pub dist: f64,
     /// Solid-angle density of having sampled `wi` (0: nothing to sample, such as the
-    /// back of a rectangle).
+    /// back of the light; the sample is then to be skipped).
     pub pdf: f64,
 }
 
@@ -139,59 +137,50 @@ impl AreaLight {
     /// sphere"); anything else uniformly by area ([`AreaLight::sample`]), with the density
     /// converted to solid angle. Uses one 2D sample either way.
     pub(crate) fn sample_from(&self, p: DVec3, u: (f64, f64)) -> LightSample {
-        if let Some((axis, d, one_minus_cos_max)) = self.cone(p) {
-            let (c, r) = self.ball.expect("a cone comes from a ball");
-            // cos θ uniform in [cos θ_max, 1]; sin²θ from 1 − cos θ without cancellation.
-            let omc = u.0 * one_minus_cos_max;
-            let sin2 = (omc * (2.0 - omc)).max(0.0);
-            let cos_t = 1.0 - omc;
-            // The angle at the centre between the axis (towards p) and the point where
-            // the sampled direction first meets the sphere.
-            let cos_a = sin2 * d / r + cos_t * (1.0 - sin2 * d * d / (r * r)).max(0.0).sqrt();
-            let cos_a = cos_a.clamp(-1.0, 1.0);
-            let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
-            let phi = 2.0 * PI * u.1;
-            let (t, b) = frame(-axis);
-            let n = (t * phi.cos() + b * phi.sin()) * sin_a - axis * cos_a;
-            let q = c + n * r;
-            let to = q - p;
-            let dist = to.length();
-            // A shading point on the light itself (its own surface seen from outside, as
-            // Mitsuba's margin allows) can draw the point it stands on: nothing to sample.
-            if !(dist > 0.0 && dist.is_finite()) {
-                return LightSample {
-                    n_world: Vec3::Y,
-                    wi: DVec3::Z,
-                    dist: 0.0,
-                    pdf: 0.0,
-                };
+        // The point on the light, its unnormalized world normal, and the cone's density.
+        let (q, n_world, cone_pdf) = match self.cone(p) {
+            Some((axis, d, one_minus_cos_max)) => {
+                let (c, r) = self.ball.expect("a cone comes from a ball");
+                // cos θ uniform in [cos θ_max, 1]; sin²θ from 1 − cos θ without
+                // cancellation.
+                let omc = u.0 * one_minus_cos_max;
+                let sin2 = (omc * (2.0 - omc)).max(0.0);
+                let cos_t = 1.0 - omc;
+                // The angle at the centre between the axis (towards p) and the point
+                // where the sampled direction first meets the sphere.
+                let cos_a = sin2 * d / r + cos_t * (1.0 - sin2 * d * d / (r * r)).max(0.0).sqrt();
+                let cos_a = cos_a.clamp(-1.0, 1.0);
+                let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
+                let phi = 2.0 * PI * u.1;
+                let (t, b) = frame(-axis);
+                let n = (t * phi.cos() + b * phi.sin()) * sin_a - axis * cos_a;
+                // The normal's direction (hits report m⁻ᵀ·n_obj, which for a similarity
+                // of scale r is this over r; only its direction is used).
+                (
+                    c + n * r,
+                    crate::real::vec3(n),
+                    Some(1.0 / (2.0 * PI * one_minus_cos_max)),
+                )
             }
-            // The normal's direction (hits report m⁻ᵀ·n_obj, which for a similarity of
-            // scale r is this over r; only its direction is used).
-            return LightSample {
-                n_world: crate::real::vec3(n),
-                wi: to / dist,
-                dist,
-                pdf: 1.0 / (2.0 * PI * one_minus_cos_max),
-            };
-        }
-        let (q, n_world) = self.sample(u);
-        let to = crate::real::dvec3(q) - p;
+            None => {
+                let (q, n_world) = self.sample(u);
+                (crate::real::dvec3(q), n_world, None)
+            }
+        };
+        let to = q - p;
         let d2 = to.length_squared();
         let dist = d2.sqrt();
         let wi = to / dist;
+        // Nothing to sample on the back of the light, nor where the shading point lies on
+        // the light itself (its own surface counts as outside, by Mitsuba's margin) and
+        // draws the point it stands on (distance 0: the cosine is NaN).
         let cos_l = crate::real::dvec3(n_world).normalize().dot(-wi);
         let pdf = if cos_l > 0.0 {
-            self.pdf_area(n_world) as f64 * d2 / cos_l
+            cone_pdf.unwrap_or_else(|| self.pdf_area(n_world) as f64 * d2 / cos_l)
         } else {
             0.0
         };
-        LightSample {
-            n_world,
-            wi,
-            dist,
-            pdf,
-        }
+        LightSample { wi, dist, pdf }
     }
 
     /// The solid-angle density with which [`AreaLight::sample_from`] at `p` would give

@@ -297,10 +297,8 @@ impl<'a> PhysicalIntegrator<'a> {
         }
         for light in &self.scene.area_lights {
             let ls = light.sample_from(p, smp.next_2d());
-            // The back of the light does not emit.
-            if !(ls.pdf > 0.0 && ls.pdf.is_finite())
-                || dv(ls.n_world).normalize().dot(-ls.wi) <= 0.0
-            {
+            // Nothing to sample (the back of the light does not emit).
+            if !(ls.pdf > 0.0 && ls.pdf.is_finite()) {
                 continue;
             }
             let (f, pdf_b) = self.eval_light(s, wo, ls.wi);
