@@ -518,10 +518,7 @@ impl Aggregate {
     /// walk is interleaved: the BVHs of meshes and nested groups below it are walked one
     /// ray at a time. The classic integrator's camera rays and the AOVs go through here.
     pub fn intersect_many(&self, rays: &[Ray], t_min: Real, t_max: Real, out: &mut [Option<Hit>]) {
-        assert_eq!(rays.len(), out.len(), "one output per ray");
-        for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
-            self.intersect_batch::<true>(rays, t_min, &[t_max; BATCH][..rays.len()], out);
-        }
+        self.intersect_many_with::<true>(rays, t_min, t_max, out)
     }
 
     /// [`Aggregate::intersect_many`] without uv, as [`Aggregate::intersect_for_shading`].
@@ -532,9 +529,20 @@ impl Aggregate {
         t_max: Real,
         out: &mut [Option<Hit>],
     ) {
+        self.intersect_many_with::<false>(rays, t_min, t_max, out)
+    }
+
+    #[inline]
+    fn intersect_many_with<const UV: bool>(
+        &self,
+        rays: &[Ray],
+        t_min: Real,
+        t_max: Real,
+        out: &mut [Option<Hit>],
+    ) {
         assert_eq!(rays.len(), out.len(), "one output per ray");
         for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
-            self.intersect_batch::<false>(rays, t_min, &[t_max; BATCH][..rays.len()], out);
+            self.intersect_batch::<UV>(rays, t_min, &[t_max; BATCH][..rays.len()], out);
         }
     }
 
