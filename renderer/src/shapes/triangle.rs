@@ -297,12 +297,13 @@ pub(crate) fn surface(
 mod tests {
     use super::*;
 
-    /// A small deterministic generator (SplitMix64) for the tests' random triangles.
+    /// Deterministic numbers for the tests' random triangles: the sampler's hash of a
+    /// running count.
     struct Rng(u64);
     impl Rng {
         fn f(&mut self) -> Real {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            ((crate::sampler::mix64(self.0) >> 40) as f64 / (1u64 << 24) as f64) as Real
+            self.0 += 1;
+            crate::sampler::uniform(0x7e57, self.0, 0) as Real
         }
         fn range(&mut self, lo: Real, hi: Real) -> Real {
             lo + (hi - lo) * self.f()
