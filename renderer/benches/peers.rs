@@ -293,6 +293,33 @@ fn mesh(dir: &Path, quick: bool) {
     println!("{json}");
 }
 
+/// One pass of closest hit over one ray set of the mesh benchmark, on one thread, with no
+/// timing loop: for Callgrind (`valgrind --tool=callgrind target/release/deps/peers-* profile
+/// shuffled`), whose counts then split build, ray generation and traversal.
+fn profile(set: &str) {
+    let (pos, tris) = big_mesh();
+    let agg = Aggregate::new(vec![Instance {
+        shape: Shape::Mesh(Arc::new(Mesh::new(pos, None, None, tris).unwrap())),
+        xf: None,
+        material: 0,
+        object_id: 1,
+    }]);
+    let sets = ray_sets(&agg, 640, 480);
+    let Some(s) = sets.iter().find(|s| s.name == set) else {
+        eprintln!("no ray set {set} (coherent, shuffled, occlusion, bounce)");
+        std::process::exit(2);
+    };
+    let hits = trace_set(&agg, &s.rays);
+    println!("{set}: {} rays, {hits} hits", s.rays.len());
+}
+
+#[inline(never)]
+fn trace_set(agg: &Aggregate, rays: &[(Ray, Real)]) -> usize {
+    rays.iter()
+        .filter(|(r, t)| agg.intersect(r, 0.0, *t).is_some())
+        .count()
+}
+
 /// Seconds per primary ray of one pass of the 128² pixel centres (one thread) on `agg`.
 fn per_ray(agg: &Aggregate) -> f64 {
     let cam = common::camera();
@@ -386,8 +413,9 @@ fn main() {
     match args.first().map(String::as_str) {
         Some("mesh") => mesh(Path::new(args.get(1).expect("peers mesh DIR")), quick),
         Some("growth") => growth(quick),
+        Some("profile") => profile(args.get(1).map(String::as_str).unwrap_or("coherent")),
         _ => {
-            eprintln!("usage: peers mesh DIR [--quick] | peers growth [--quick] (see scripts/bench-peers.sh)");
+            eprintln!("usage: peers mesh DIR [--quick] | peers growth [--quick] | peers profile SET (see scripts/bench-peers.sh)");
             std::process::exit(2);
         }
     }

@@ -1,6 +1,6 @@
 //! A bounding volume hierarchy: built by binned SAH (Wald 2007) as a binary tree, then
-//! collapsed into a 4-wide tree (each node holds the boxes of up to four children side by
-//! side, so one SIMD slab test covers them all). Nodes live in a flat array, 64-byte
+//! collapsed into a `W`-wide tree, 4 or 8 (each node holds the boxes of up to `W` children
+//! side by side, so one SIMD slab test covers them all: 4 lanes of SSE, or 8 of AVX). Nodes live in a flat array, 64-byte
 //! aligned, and traversal uses a fixed-size stack: it never allocates.
 //!
 //! The BVH knows nothing about what it bounds. It is built from a list of boxes and its
@@ -10,7 +10,7 @@
 
 use crate::aabb::Aabb;
 use crate::ray::Ray;
-use crate::real::{gamma, Real, Vec3, Vec4};
+use crate::real::{gamma, Real, Vec3};
 use arrayvec::ArrayVec;
 
 const BINS: usize = 16;
@@ -21,14 +21,18 @@ const MAX_DEPTH: usize = 60;
 /// split (coincident centroids, or the depth limit) is cut in halves by index instead,
 /// which adds at most 24 levels below `MAX_DEPTH` for any `u32` count.
 const LEAF_LIMIT: usize = u8::MAX as usize;
-/// Traversal stack for the deepest tree the build can make: a node pushes at most three
+/// Widest node the traversal stacks are sized for.
+const MAX_WIDTH: usize = 8;
+/// Traversal stack for the deepest tree the build can make: a node pushes at most `W − 1`
 /// children, once per level.
-const LONG_STACK: usize = 3 * (MAX_DEPTH + 26) + 1;
-/// Traversal stack for trees of depth up to 21 (every tree of fewer than about a million
-/// primitives in practice): a smaller array is cheaper to set up for every ray.
+const LONG_STACK: usize = (MAX_WIDTH - 1) * (MAX_DEPTH + 26) + 1;
+/// Traversal stack for 4-wide trees of depth up to 21 (every tree of fewer than about a
+/// million primitives in practice), or 8-wide ones of depth up to 9: a smaller array is
+/// cheaper to set up for every ray.
 const SHORT_STACK: usize = 64;
-/// Traversal stack for trees of depth up to 10 (a few thousand primitives, or a mesh of a
-/// million triangles in a good tree): set up for every ray, so small pays.
+/// Traversal stack for 4-wide trees of depth up to 10 (a few thousand primitives, or a
+/// mesh of a million triangles in a good tree), or 8-wide ones of depth up to 4: set up
+/// for every ray, so small pays.
 const TINY_STACK: usize = 31;
 
 /// A node of the binary tree the SAH builds. Interior nodes (`count == 0`) have children
@@ -40,56 +44,68 @@ struct Node2 {
     count: u32,
 }
 
-/// A node of the 4-wide tree: the boxes of up to four children side by side, one array
-/// of four lanes per axis and side, so that one SIMD slab test covers them all. Per child
+/// A node of the `W`-wide tree: the boxes of up to `W` children side by side, one array
+/// of `W` lanes per axis and side, so that one SIMD slab test covers them all. Per child
 /// the node holds either an interior node index (`count == 0`) or a leaf's first slot and
 /// count.
 #[repr(C, align(64))]
 #[derive(Clone, Copy, Debug)]
-struct Node {
-    /// Per axis `a`, `b[2a]` holds the four children's low sides and `b[2a + 1]` their
-    /// high sides.
-    b: [[Real; 4]; 6],
-    child: [u32; 4],
-    count: [u8; 4],
+struct Node<const W: usize> {
+    /// Per axis `a`, `b[2a]` holds the children's low sides and `b[2a + 1]` their high
+    /// sides.
+    b: [[Real; W]; 6],
+    child: [u32; W],
+    count: [u8; W],
     lanes: u8,
 }
 
-impl Node {
-    const EMPTY: Node = Node {
-        b: [[0.0; 4]; 6],
-        child: [0; 4],
-        count: [0; 4],
+impl<const W: usize> Node<W> {
+    const EMPTY: Node<W> = Node {
+        b: [[0.0; W]; 6],
+        child: [0; W],
+        count: [0; W],
         lanes: 0,
     };
 
-    /// The slab test of [`Aabb::hit`] on the four child boxes at once: each lane's entry
+    /// The slab test of [`Aabb::hit`] on the `W` child boxes at once: each lane's entry
     /// distance, and a bit mask of the lanes whose box the ray overlaps within
     /// `[t_min, t_max]`. The ray's planes are chosen by the sign of its direction (the
     /// near plane of a slab is its low side when the direction is positive). A product
     /// `(plane − o)·(1/d)` is NaN only when `d` is ±0 on that axis and the origin lies on
-    /// the plane; such a slab does not constrain the ray, as there, and rays with a zero
-    /// direction component take the path that masks it. The far distance is inflated by
-    /// `1 + 2γ(3)`, as there.
+    /// the plane; such a slab does not constrain the ray, as there: the running bounds
+    /// take a product only when it is beyond them (`t0 > near`, `t1 < far`), which a NaN
+    /// never is. (That is also the operand order of the processor's `max`/`min`, so
+    /// each lane loop compiles to a few vector instructions, with no branch.) The far
+    /// distance is inflated by `1 + 2γ(3)`, as there.
     #[inline(always)]
-    fn hit(&self, w: &Walk) -> (Vec4, u32) {
-        let mut near = Vec4::splat(w.t_min);
-        let mut far = Vec4::splat(w.t_max);
+    fn hit(&self, w: &Walk) -> ([Real; W], u32) {
+        let mut near = [w.t_min; W];
+        let live = (1u32 << self.lanes) - 1;
+        #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+        if W == 4 || (W == 8 && cfg!(target_feature = "avx")) {
+            // SAFETY: the node's boxes are `6 × W` contiguous `f32` (`Real` is `f32`
+            // here) and `near` holds `W`; `slab` reads and writes `W` lanes exactly, and
+            // it needs AVX only when `W == 8`, which is then enabled at compile time.
+            let mask = unsafe { slab::<W>(self.b.as_ptr().cast(), w, near.as_mut_ptr()) };
+            return (near, mask & live);
+        }
+        let mut far = [w.t_max; W];
         for a in 0..3 {
-            let n = Vec4::from_array(self.b[w.near[a]]);
-            let f = Vec4::from_array(self.b[w.near[a] ^ 1]);
-            let t0 = (n - w.o[a]) * w.inv_d[a];
-            let t1 = (f - w.o[a]) * w.inv_d[a];
-            if w.parallel {
-                near = near.max(Vec4::select(t0.is_nan_mask(), Vec4::NEG_INFINITY, t0));
-                far = far.min(Vec4::select(t1.is_nan_mask(), Vec4::INFINITY, t1));
-            } else {
-                near = near.max(t0);
-                far = far.min(t1);
+            let (n, f) = (&self.b[w.near[a]], &self.b[w.near[a] ^ 1]);
+            let (o, inv) = (w.o[a], w.inv_d[a]);
+            for k in 0..W {
+                let t0 = (n[k] - o) * inv;
+                let t1 = (f[k] - o) * inv;
+                near[k] = if t0 > near[k] { t0 } else { near[k] };
+                far[k] = if t1 < far[k] { t1 } else { far[k] };
             }
         }
-        let mask = near.cmple(far * (1.0 + 2.0 * gamma(3))).bitmask() & ((1 << self.lanes) - 1);
-        (near, mask)
+        let grow = 1.0 + 2.0 * gamma(3);
+        let mut mask = 0u32;
+        for k in 0..W {
+            mask |= ((near[k] <= far[k] * grow) as u32) << k;
+        }
+        (near, mask & live)
     }
 
     /// Stores the children's boxes (in lane order).
@@ -104,6 +120,73 @@ impl Node {
     }
 }
 
+/// [`Node::hit`]'s slab test in SIMD registers, for 4 lanes (SSE) or 8 (AVX): the same
+/// operations on the same values as its lane loop, so the same bits. `b` points at the
+/// node's `6 × W` box planes and `near` receives the `W` entry distances; returns the
+/// overlap mask of all `W` lanes. `maxps(t0, near)` is `t0 > near ? t0 : near` and
+/// `minps(t1, far)` is `t1 < far ? t1 : far`, which is how a NaN product is ignored.
+///
+/// # Safety
+/// `b` must be valid for reading `6 × W` floats and `near` for writing `W`; `W` must be
+/// 4, or 8 with AVX enabled.
+#[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
+#[inline(always)]
+unsafe fn slab<const W: usize>(b: *const f32, w: &Walk, near: *mut f32) -> u32 {
+    use std::arch::x86_64::*;
+    // The test, written once for both register widths (`$l` lanes).
+    macro_rules! lanes {
+        ($l:literal, $set1:ident, $load:ident, $store:ident, $sub:ident, $mul:ident,
+         $max:ident, $min:ident, $le:expr, $movemask:ident) => {{
+            let mut n = $set1(w.t_min);
+            let mut f = $set1(w.t_max);
+            for a in 0..3 {
+                let (o, inv) = ($set1(w.o[a]), $set1(w.inv_d[a]));
+                let lo = $load(b.add($l * w.near[a]));
+                let hi = $load(b.add($l * (w.near[a] ^ 1)));
+                n = $max($mul($sub(lo, o), inv), n);
+                f = $min($mul($sub(hi, o), inv), f);
+            }
+            $store(near, n);
+            $movemask($le(n, $mul(f, $set1(1.0 + 2.0 * gamma(3))))) as u32
+        }};
+    }
+    if W == 8 {
+        #[cfg(target_feature = "avx")]
+        // SAFETY: as the function's contract says; AVX is enabled at compile time.
+        return unsafe {
+            lanes!(
+                8,
+                _mm256_set1_ps,
+                _mm256_loadu_ps,
+                _mm256_storeu_ps,
+                _mm256_sub_ps,
+                _mm256_mul_ps,
+                _mm256_max_ps,
+                _mm256_min_ps,
+                _mm256_cmp_ps::<_CMP_LE_OQ>,
+                _mm256_movemask_ps
+            )
+        };
+        #[cfg(not(target_feature = "avx"))]
+        unreachable!("8-wide slabs need AVX");
+    }
+    // SAFETY: as the function's contract says (`W == 4`); SSE is part of x86_64.
+    unsafe {
+        lanes!(
+            4,
+            _mm_set1_ps,
+            _mm_loadu_ps,
+            _mm_storeu_ps,
+            _mm_sub_ps,
+            _mm_mul_ps,
+            _mm_max_ps,
+            _mm_min_ps,
+            _mm_cmple_ps,
+            _mm_movemask_ps
+        )
+    }
+}
+
 /// A child waiting on the traversal stack, with its entry distance.
 #[derive(Clone, Copy)]
 struct Entry {
@@ -112,14 +195,25 @@ struct Entry {
     near: Real,
 }
 
-/// A BVH over primitives given by their boxes.
-#[derive(Clone, Debug, Default)]
-pub struct Bvh {
+/// A BVH over primitives given by their boxes, with nodes `W` wide (4 or 8).
+#[derive(Clone, Debug)]
+pub struct Bvh<const W: usize = 4> {
     /// The root is `nodes[0]`; empty when there are no primitives.
-    nodes: Vec<Node>,
+    nodes: Vec<Node<W>>,
     bounds: Aabb,
-    /// Most stack entries a traversal can need: 3 per level below the root, plus one.
+    /// Most stack entries a traversal can need: `W − 1` per level below the root, plus
+    /// one.
     stack_need: usize,
+}
+
+impl<const W: usize> Default for Bvh<W> {
+    fn default() -> Self {
+        Bvh {
+            nodes: Vec::new(),
+            bounds: Aabb::default(),
+            stack_need: 0,
+        }
+    }
 }
 
 /// What the traversal closure says about a primitive.
@@ -130,24 +224,25 @@ pub enum Visit {
     Hit(Real),
 }
 
-impl Bvh {
+impl<const W: usize> Bvh<W> {
     /// Builds a BVH over `items`, whose boxes (all finite) are `boxes`, and returns it with
     /// the items permuted into leaf order: a leaf's primitives then sit side by side in
     /// memory, and traversal reads them with no index array in between.
     /// `traversal_cost` is the cost of one binary node visit in units of one primitive
     /// test, for the SAH.
-    pub fn build<T>(items: Vec<T>, boxes: &[Aabb], traversal_cost: Real) -> (Bvh, Vec<T>) {
+    pub fn build<T>(items: Vec<T>, boxes: &[Aabb], traversal_cost: Real) -> (Bvh<W>, Vec<T>) {
+        const { assert!(W >= 2 && W <= MAX_WIDTH) };
         assert_eq!(items.len(), boxes.len(), "one box per item");
         let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
         let bvh = if boxes.is_empty() {
             Bvh::default()
         } else {
             let binary = build_binary(&mut order, boxes, traversal_cost);
-            let (nodes, depth) = collapse(&binary);
+            let (nodes, depth) = collapse::<W>(&binary);
             Bvh {
                 nodes,
                 bounds: binary[0].bounds,
-                stack_need: 3 * depth + 1,
+                stack_need: (W - 1) * depth + 1,
             }
         };
         let mut slots: Vec<Option<T>> = items.into_iter().map(Some).collect();
@@ -171,7 +266,7 @@ impl Bvh {
         boxes: &[Aabb],
         traversal_cost: Real,
         align: usize,
-    ) -> (Bvh, Vec<Option<T>>) {
+    ) -> (Bvh<W>, Vec<Option<T>>) {
         let (mut bvh, ordered) = Bvh::build(items, boxes, traversal_cost);
         // Every leaf lane, in slot order (leaves cover the slots once, side by side).
         let mut leaves: Vec<(u32, usize, usize)> = Vec::new();
@@ -208,7 +303,7 @@ impl Bvh {
         self.bounds
     }
 
-    /// Number of 4-wide nodes, for statistics.
+    /// Number of `W`-wide nodes, for statistics.
     pub fn node_count(&self) -> usize {
         self.nodes.len()
     }
@@ -235,7 +330,60 @@ impl Bvh {
         t_min: Real,
         t_max: Real,
         any: bool,
+        visit: F,
+    ) -> bool
+    where
+        F: FnMut(u32, u8, Real) -> Visit,
+    {
+        self.walk_one::<false, F>(ray, t_min, t_max, any, visit, &|_, _| {})
+    }
+
+    /// [`Bvh::traverse_leaves`] for a tree larger than the cache: as soon as a node's
+    /// slab test tells which children the ray overlaps, it asks for the memory of all of
+    /// them (a prefetch: the child nodes, or through `leaf_ahead(first, count)` the
+    /// records of the leaves), so their cache misses overlap each other and the work on
+    /// the nearest child, instead of following one another. The walk, and so every
+    /// result, is the same.
+    #[inline]
+    pub fn traverse_leaves_prefetching<F, L>(
+        &self,
+        ray: &Ray,
+        t_min: Real,
+        t_max: Real,
+        any: bool,
+        visit: F,
+        leaf_ahead: L,
+    ) -> bool
+    where
+        F: FnMut(u32, u8, Real) -> Visit,
+        L: Fn(u32, u8),
+    {
+        self.walk_one::<true, F>(ray, t_min, t_max, any, visit, &self.ahead(leaf_ahead))
+    }
+
+    /// The prefetch of a child: its node, or its leaf's records by `leaf_ahead`.
+    #[inline(always)]
+    fn ahead<'a>(&'a self, leaf_ahead: impl Fn(u32, u8) + 'a) -> impl Fn(u32, u8) + 'a {
+        move |child: u32, count: u8| {
+            if count == 0 {
+                prefetch(&self.nodes[child as usize]);
+            } else {
+                leaf_ahead(child, count);
+            }
+        }
+    }
+
+    /// The single-ray walk; `ahead` is given every overlapped child (with `ALL`) or the
+    /// next child to take.
+    #[inline(always)]
+    fn walk_one<const ALL: bool, F>(
+        &self,
+        ray: &Ray,
+        t_min: Real,
+        t_max: Real,
+        any: bool,
         mut visit: F,
+        ahead: &impl Fn(u32, u8),
     ) -> bool
     where
         F: FnMut(u32, u8, Real) -> Visit,
@@ -258,13 +406,13 @@ impl Bvh {
         let mut w = Walk::new(ray, t_min, t_max);
         if self.stack_need <= TINY_STACK {
             let mut stack = ArrayVec::<Entry, TINY_STACK>::new();
-            while w.step(&mut stack, &self.nodes, any, &mut visit, &|_, _| {}) {}
+            while w.step::<_, _, _, ALL>(&mut stack, &self.nodes, any, &mut visit, ahead) {}
         } else if self.stack_need <= SHORT_STACK {
             let mut stack = ArrayVec::<Entry, SHORT_STACK>::new();
-            while w.step(&mut stack, &self.nodes, any, &mut visit, &|_, _| {}) {}
+            while w.step::<_, _, _, ALL>(&mut stack, &self.nodes, any, &mut visit, ahead) {}
         } else {
             let mut stack = ArrayVec::<Entry, LONG_STACK>::new();
-            while w.step(&mut stack, &self.nodes, any, &mut visit, &|_, _| {}) {}
+            while w.step::<_, _, _, ALL>(&mut stack, &self.nodes, any, &mut visit, ahead) {}
         }
         w.hit
     }
@@ -322,13 +470,7 @@ impl Bvh {
             }
             return;
         }
-        let ahead = |child: u32, count: u8| {
-            if count == 0 {
-                prefetch(&self.nodes[child as usize]);
-            } else {
-                leaf_ahead(child, count);
-            }
-        };
+        let ahead = self.ahead(leaf_ahead);
         if self.stack_need <= TINY_STACK {
             self.walk_batch::<TINY_STACK>(rays, t_min, t_max, &mut visit, &ahead);
         } else if self.stack_need <= SHORT_STACK {
@@ -357,7 +499,7 @@ impl Bvh {
         while active != 0 {
             for (r, (w, stack)) in walks.iter_mut().zip(stacks.iter_mut()).enumerate() {
                 if active & (1u64 << r) != 0
-                    && !w.step(
+                    && !w.step::<_, _, _, false>(
                         stack,
                         &self.nodes,
                         false,
@@ -441,13 +583,11 @@ pub fn prefetch<T: ?Sized>(x: &T) {
 /// One ray's traversal state, apart from its stack.
 #[derive(Clone, Copy)]
 struct Walk {
-    o: [Vec4; 3],
-    inv_d: [Vec4; 3],
+    o: [Real; 3],
+    inv_d: [Real; 3],
     /// Per axis `a`, the index in [`Node::b`] of the slab's near side: `2a` (low) when the
     /// direction is positive, `2a + 1` (high) when negative (its sign bit: −0 counts).
     near: [usize; 3],
-    /// Whether a direction component is ±0 (its slabs can give NaN; see [`Node::hit`]).
-    parallel: bool,
     t_min: Real,
     t_max: Real,
     /// The child to take next: an interior node (`count == 0`) or a leaf's slots.
@@ -459,7 +599,12 @@ struct Walk {
 impl Walk {
     /// Pushes lane `lane` of node `n`, entered at `near`.
     #[inline(always)]
-    fn push<const N: usize>(stack: &mut ArrayVec<Entry, N>, n: &Node, lane: usize, near: Real) {
+    fn push<const N: usize, const W: usize>(
+        stack: &mut ArrayVec<Entry, N>,
+        n: &Node<W>,
+        lane: usize,
+        near: Real,
+    ) {
         // The stack holds 3 entries per level below the root plus one (`stack_need`),
         // which is what a traversal can push, so it never overflows.
         stack.push(Entry {
@@ -473,18 +618,13 @@ impl Walk {
     fn new(ray: &Ray, t_min: Real, t_max: Real) -> Self {
         let inv = Vec3::ONE / ray.d;
         Walk {
-            parallel: ray.d.cmpeq(Vec3::ZERO).any(),
             near: [
                 ray.d.x.is_sign_negative() as usize,
                 2 + ray.d.y.is_sign_negative() as usize,
                 4 + ray.d.z.is_sign_negative() as usize,
             ],
-            o: [
-                Vec4::splat(ray.o.x),
-                Vec4::splat(ray.o.y),
-                Vec4::splat(ray.o.z),
-            ],
-            inv_d: [Vec4::splat(inv.x), Vec4::splat(inv.y), Vec4::splat(inv.z)],
+            o: ray.o.to_array(),
+            inv_d: inv.to_array(),
             t_min,
             t_max,
             child: 0,
@@ -494,12 +634,13 @@ impl Walk {
     }
 
     /// Tests the current node or visits the current leaf, then moves to the next child
-    /// to take, and passes it to `ahead`. Returns false once the traversal is over.
+    /// to take, and passes it to `ahead` (with `ALL`, passes every child the node's test
+    /// found instead). Returns false once the traversal is over.
     #[inline(always)]
-    fn step<const N: usize, F>(
+    fn step<const N: usize, const W: usize, F, const ALL: bool>(
         &mut self,
         stack: &mut ArrayVec<Entry, N>,
-        nodes: &[Node],
+        nodes: &[Node<W>],
         any: bool,
         visit: &mut F,
         ahead: &impl Fn(u32, u8),
@@ -510,6 +651,14 @@ impl Walk {
         if self.count == 0 {
             let n = &nodes[self.child as usize];
             let (near, mask) = n.hit(self);
+            if ALL {
+                let mut m = mask;
+                while m != 0 {
+                    let lane = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    ahead(n.child[lane], n.count[lane]);
+                }
+            }
             if mask != 0 {
                 // Take the nearest overlapped lane next and push the others, farthest
                 // first, so they pop nearest first. Ties keep lane order (a stable
@@ -521,7 +670,6 @@ impl Walk {
                 // node is a descent. (Large primitives, such as a ground quad, sit in
                 // leaves near the root; a shadow ray that crosses one needs nothing else.)
                 // The stack keeps each lane's entry distance either way.
-                let near = near.to_array();
                 let mut key = near;
                 if any {
                     for (k, c) in key.iter_mut().zip(n.count) {
@@ -544,7 +692,7 @@ impl Walk {
                     Walk::push(stack, n, b, near[b]);
                     a
                 } else {
-                    let mut lanes = [0usize; 4];
+                    let mut lanes = [0usize; W];
                     let mut k = 0;
                     let mut m = mask;
                     while m != 0 {
@@ -564,7 +712,9 @@ impl Walk {
                     lanes[0]
                 };
                 (self.child, self.count) = (n.child[next], n.count[next]);
-                ahead(self.child, self.count);
+                if !ALL {
+                    ahead(self.child, self.count);
+                }
                 return true;
             }
         } else {
@@ -581,7 +731,9 @@ impl Walk {
         while let Some(e) = stack.pop() {
             if e.near <= self.t_max * grow {
                 (self.child, self.count) = (e.child, e.count);
-                ahead(self.child, self.count);
+                if !ALL {
+                    ahead(self.child, self.count);
+                }
                 return true;
             }
         }
@@ -655,22 +807,22 @@ fn build_binary(order: &mut [u32], boxes: &[Aabb], traversal_cost: Real) -> Vec<
     nodes
 }
 
-/// Collapses a binary tree into a 4-wide one: each 4-wide node takes a binary node's
+/// Collapses a binary tree into a `W`-wide one: each `W`-wide node takes a binary node's
 /// children and keeps opening the interior child with the largest surface area until it
-/// has four. Interior children are stored side by side, depth first.
+/// has `W`. Interior children are stored side by side, depth first.
 /// Returns the nodes and the number of levels below the root.
-fn collapse(bin: &[Node2]) -> (Vec<Node>, usize) {
+fn collapse<const W: usize>(bin: &[Node2]) -> (Vec<Node<W>>, usize) {
     let mut out = vec![Node::EMPTY];
     let mut depth = 0;
     let mut work = vec![(0usize, 0usize, 0usize)];
     while let Some((b, o, level)) = work.pop() {
         depth = depth.max(level);
-        let mut kids = [0usize; 4];
+        let mut kids = [0usize; W];
         let mut k = 1;
         if bin[b].count == 0 {
             kids[..2].copy_from_slice(&[bin[b].first as usize, bin[b].first as usize + 1]);
             k = 2;
-            while k < 4 {
+            while k < W {
                 let mut open: Option<usize> = None;
                 for i in 0..k {
                     let n = &bin[kids[i]];

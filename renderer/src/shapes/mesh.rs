@@ -19,7 +19,7 @@ pub struct Mesh {
     pub uvs: Option<Vec<Vec2>>,
     /// Triangles as vertex indices, in BVH leaf order (not file order).
     pub triangles: Vec<[u32; 3]>,
-    bvh: Bvh,
+    bvh: Bvh<8>,
     /// The triangles' vertices, four per pack, in the BVH's slot order: every leaf starts
     /// a pack, so a leaf is tested a pack (four triangles) at a time with no index array
     /// in between. (36 bytes per triangle, plus the padding of partly filled packs.)
@@ -28,10 +28,13 @@ pub struct Mesh {
     pack_tris: Vec<[u32; 4]>,
 }
 
-/// The closest hit so far in a mesh search: the triangle, `t` and the barycentrics.
+/// The closest hit so far in a mesh search: the triangle (its pack and lane), `t` and the
+/// barycentrics. The search reads nothing but the tree and the packs; the triangle's
+/// index (for its normals and uvs) is looked up once, for the winner.
 #[derive(Clone, Copy, Debug)]
 struct Candidate {
-    tri: u32,
+    pack: u32,
+    lane: u8,
     t: Real,
     b: [Real; 3],
 }
@@ -90,7 +93,7 @@ impl Mesh {
                 b
             })
             .collect();
-        let (bvh, slots) = Bvh::build_aligned(triangles, &boxes, 1.0, 4);
+        let (bvh, slots) = Bvh::<8>::build_aligned(triangles, &boxes, 1.0, 4);
         let mut triangles = Vec::with_capacity(boxes.len());
         let (mut packs, mut pack_tris) = (Vec::new(), Vec::new());
         for chunk in slots.chunks(4) {
@@ -197,10 +200,14 @@ impl Mesh {
     pub fn intersect(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         let wr = WoopRay::new(ray);
         let mut best: Option<Candidate> = None;
-        self.bvh
-            .traverse_leaves(ray, t_min, t_max, false, |first, count, tmax| {
-                self.visit_leaf(&wr, first, count, t_min, tmax, &mut best)
-            });
+        self.bvh.traverse_leaves_prefetching(
+            ray,
+            t_min,
+            t_max,
+            false,
+            |first, count, tmax| self.visit_leaf(&wr, first, count, t_min, tmax, &mut best),
+            |first, count| self.leaf_ahead(first, count),
+        );
         best.map(|c| self.finish(c))
     }
 
@@ -234,14 +241,18 @@ impl Mesh {
             |r, first, count, tmax| {
                 self.visit_leaf(&wrs[r], first, count, t_min, tmax, &mut best[r])
             },
-            |first, count| {
-                let first = first as usize / 4;
-                prefetch(&self.packs[first..first + (count as usize).div_ceil(4)])
-            },
+            |first, count| self.leaf_ahead(first, count),
         );
         for (o, b) in out.iter_mut().zip(best) {
             *o = b.map(|c| self.finish(c));
         }
+    }
+
+    /// Asks for the packs of the leaf at slots `first..first + count` ahead of its test.
+    #[inline(always)]
+    fn leaf_ahead(&self, first: u32, count: u8) {
+        let first = first as usize / 4;
+        prefetch(&self.packs[first..first + (count as usize).div_ceil(4)])
     }
 
     /// Whether [`Mesh::intersect_batch`] walks rays together: whether the tree and the
@@ -271,7 +282,8 @@ impl Mesh {
             let lanes = (count - 4 * k).min(4);
             if let Some((lane, t, b)) = wr.hit4(pack, lanes, t_min, t_max) {
                 *best = Some(Candidate {
-                    tri: self.pack_tris[first + k][lane],
+                    pack: (first + k) as u32,
+                    lane: lane as u8,
                     t,
                     b,
                 });
@@ -287,18 +299,20 @@ impl Mesh {
     }
 
     /// The hit record of the winning candidate (built once per ray, for the closest hit
-    /// only).
+    /// only). The vertices come from the pack the search just read (the same values as
+    /// `positions`, copied); the triangle's vertex indices are read only for normals or
+    /// uvs.
     #[inline]
     fn finish(&self, c: Candidate) -> Hit {
-        let (i, t, b) = (c.tri, c.t, c.b);
-        let [p0, p1, p2] = self.vertices(i as usize);
-        let tri = self.triangles[i as usize];
-        let pick3 = |v: &Vec<Vec3>| [v[tri[0] as usize], v[tri[1] as usize], v[tri[2] as usize]];
-        let n = self.normals.as_ref().map(pick3);
-        let uv = self
-            .uvs
-            .as_ref()
-            .map(|v| [v[tri[0] as usize], v[tri[1] as usize], v[tri[2] as usize]]);
+        let (t, b) = (c.t, c.b);
+        let [p0, p1, p2] = self.packs[c.pack as usize].triangle(c.lane as usize);
+        let tri = (self.normals.is_some() || self.uvs.is_some())
+            .then(|| self.triangles[self.pack_tris[c.pack as usize][c.lane as usize] as usize]);
+        let pick3 = |v: &Vec<Vec3>| tri.map(|t| [v[t[0] as usize], v[t[1] as usize], v[t[2] as usize]]);
+        let n = self.normals.as_ref().and_then(pick3);
+        let uv = self.uvs.as_ref().and_then(|v| {
+            tri.map(|t| [v[t[0] as usize], v[t[1] as usize], v[t[2] as usize]])
+        });
         surface(
             t,
             b,
@@ -312,8 +326,12 @@ impl Mesh {
     /// Whether any triangle is hit.
     pub fn occluded(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
         let wr = WoopRay::new(ray);
-        self.bvh
-            .traverse_leaves(ray, t_min, t_max, true, |first, count, tmax| {
+        self.bvh.traverse_leaves(
+            ray,
+            t_min,
+            t_max,
+            true,
+            |first, count, tmax| {
                 let (first, count) = (first as usize / 4, count as usize);
                 for (k, pack) in self.packs[first..first + count.div_ceil(4)]
                     .iter()
@@ -324,6 +342,7 @@ impl Mesh {
                     }
                 }
                 Visit::Miss
-            })
+            },
+        )
     }
 }
