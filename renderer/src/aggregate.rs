@@ -349,7 +349,7 @@ pub struct Aggregate {
     pub instances: Vec<Instance>,
     /// One lead per bounded instance, in the same order.
     leads: Vec<Lead>,
-    bvh: Bvh,
+    bvh: Bvh<8>,
     /// For each instance in the order given to [`Aggregate::new`], its index in `instances`.
     scene_order: Vec<u32>,
     /// [`Hit::surface`] offset of each instance (the surfaces of the instances before it),
@@ -368,7 +368,7 @@ impl Aggregate {
             .enumerate()
             .partition(|(_, inst)| inst.bounds().is_finite());
         let boxes: Vec<Aabb> = bounded.iter().map(|(_, i)| i.bounds()).collect();
-        let (bvh, mut tagged) = Bvh::build(bounded, &boxes, TRAVERSAL_COST);
+        let (bvh, mut tagged) = Bvh::<8>::build(bounded, &boxes, TRAVERSAL_COST);
         let leads = tagged.iter().map(|(_, i)| Lead::of(i)).collect();
         tagged.extend(unbounded);
         let mut scene_order = vec![0u32; tagged.len()];
