@@ -89,6 +89,15 @@ impl<const W: usize> Node<W> {
             let mask = unsafe { slab::<W>(self.b.as_ptr().cast(), w, near.as_mut_ptr()) };
             return (near, mask & live);
         }
+        self.hit_lanes(w)
+    }
+
+    /// [`Node::hit`] as a loop over the lanes: what the SIMD test computes, operation for
+    /// operation (and what the f64 build and a build without AVX run).
+    #[inline(always)]
+    fn hit_lanes(&self, w: &Walk) -> ([Real; W], u32) {
+        let mut near = [w.t_min; W];
+        let live = (1u32 << self.lanes) - 1;
         let mut far = [w.t_max; W];
         for a in 0..3 {
             let (n, f) = (&self.b[w.near[a]], &self.b[w.near[a] ^ 1]);
@@ -197,7 +206,7 @@ struct Entry {
 
 /// A BVH over primitives given by their boxes, with nodes `W` wide (4 or 8).
 #[derive(Clone, Debug)]
-pub struct Bvh<const W: usize = 4> {
+pub struct Bvh<const W: usize = 8> {
     /// The root is `nodes[0]`; empty when there are no primitives.
     nodes: Vec<Node<W>>,
     bounds: Aabb,
@@ -925,4 +934,86 @@ fn best_split(
         }
     }
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Test numbers: the sampler's hash of (test, case, dimension), in [0, 1).
+    fn u(case: u64, dim: u64) -> Real {
+        crate::sampler::uniform(0xb7b, case, dim) as Real
+    }
+
+    /// The node test in SIMD lanes (SSE at 4, AVX at 8) gives the bits of the lane loop,
+    /// on rays that cross boxes, miss them, run along a box's plane with a zero direction
+    /// component (the NaN products the test must ignore), start on a plane, or pass
+    /// through a corner.
+    fn simd_matches_lanes<const W: usize>() {
+        let mut seen = [0usize; 3];
+        for case in 0..4000u64 {
+            let mut node = Node::<W>::EMPTY;
+            let boxes: Vec<Aabb> = (0..W)
+                .map(|k| {
+                    let c = Vec3::new(u(case, 6 * k as u64), u(case, 6 * k as u64 + 1), 0.0)
+                        * 4.0
+                        - 2.0;
+                    let h = Vec3::new(u(case, 6 * k as u64 + 2), u(case, 6 * k as u64 + 3), 0.5);
+                    Aabb { min: c - h, max: c + h }
+                })
+                .collect();
+            let lanes = 1 + (case as usize % W);
+            node.set_boxes(&boxes[..lanes]);
+            let mut o = Vec3::new(u(case, 100), u(case, 101), u(case, 102)) * 6.0 - 3.0;
+            let mut d = Vec3::new(u(case, 103), u(case, 104), u(case, 105)) * 2.0 - 1.0;
+            match case % 5 {
+                // A zero (or negative zero) direction component, the origin on a plane.
+                1 => {
+                    d.x = if case % 8 == 1 { 0.0 } else { -0.0 };
+                    o.x = boxes[0].min.x;
+                }
+                2 => {
+                    d.y = 0.0;
+                    o.y = boxes[0].max.y;
+                    d.z = -0.0;
+                }
+                3 => o = boxes[0].centroid(),
+                // Through a corner: entry and exit meet there, up to rounding, which the
+                // far distance's inflation must absorb in both tests.
+                4 => d = Vec3::new(boxes[0].max.x, boxes[0].min.y, boxes[0].max.z) - o,
+                _ => {}
+            }
+            let w = Walk::new(&Ray::new(o, d), 0.0, 4.0 * u(case, 106) + 0.5);
+            let (simd, lanes_loop) = (node.hit(&w), node.hit_lanes(&w));
+            assert_eq!(
+                simd.1, lanes_loop.1,
+                "case {case}: the SIMD node test (bvh::slab) and the lane loop \
+                 (Node::hit_lanes) disagree on which of {W} boxes the ray overlaps"
+            );
+            for k in 0..lanes {
+                assert_eq!(
+                    simd.0[k].to_bits(),
+                    lanes_loop.0[k].to_bits(),
+                    "case {case}, lane {k}: entry distances differ between bvh::slab and \
+                     Node::hit_lanes"
+                );
+            }
+            seen[(simd.1 != 0) as usize] += 1;
+            seen[2] += (simd.1 != 0 && simd.1 != (1 << lanes) - 1) as usize;
+        }
+        assert!(
+            seen.iter().all(|&n| n > 100),
+            "the cases must include hits, misses and partial masks: {seen:?}"
+        );
+    }
+
+    #[test]
+    fn simd_node_test_matches_the_lane_loop_at_4_lanes() {
+        simd_matches_lanes::<4>();
+    }
+
+    #[test]
+    fn simd_node_test_matches_the_lane_loop_at_8_lanes() {
+        simd_matches_lanes::<8>();
+    }
 }
