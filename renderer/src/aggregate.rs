@@ -492,7 +492,7 @@ impl Aggregate {
     }
 
     /// Tests bounded instance `k` for [`Bvh::traverse`], keeping a closer hit in `best`.
-    #[inline]
+    #[inline(always)]
     fn visit(
         &self,
         k: u32,
