@@ -294,8 +294,9 @@ fn mesh(dir: &Path, quick: bool) {
 }
 
 /// One pass of closest hit over one ray set of the mesh benchmark, on one thread, with no
-/// timing loop: for Callgrind (`valgrind --tool=callgrind target/release/deps/peers-* profile
-/// shuffled`), whose counts then split build, ray generation and traversal.
+/// timing loop: for Callgrind (`valgrind --tool=callgrind --toggle-collect='peers::trace_set'
+/// BENCH profile shuffled`, BENCH being target/release/deps/peers-HASH, not its `.d` file),
+/// which then counts the traversal alone.
 fn profile(set: &str) {
     let (pos, tris) = big_mesh();
     let agg = Aggregate::new(vec![Instance {

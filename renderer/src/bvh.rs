@@ -24,15 +24,14 @@ const LEAF_LIMIT: usize = u8::MAX as usize;
 /// Widest node the traversal stacks are sized for.
 const MAX_WIDTH: usize = 8;
 /// Traversal stack for the deepest tree the build can make: a node pushes at most `W − 1`
-/// children, once per level.
-const LONG_STACK: usize = (MAX_WIDTH - 1) * (MAX_DEPTH + 26) + 1;
-/// Traversal stack for 4-wide trees of depth up to 21 (every tree of fewer than about a
-/// million primitives in practice), or 8-wide ones of depth up to 9: a smaller array is
-/// cheaper to set up for every ray.
+/// children, once per level, the root's level included.
+const LONG_STACK: usize = (MAX_WIDTH - 1) * (MAX_DEPTH + 27);
+/// Traversal stack for 8-wide trees of up to 9 levels (depth 8: a mesh of a million
+/// triangles in a good tree), or 4-wide ones of up to 21: a smaller array is cheaper to
+/// set up for every ray.
 const SHORT_STACK: usize = 64;
-/// Traversal stack for 4-wide trees of depth up to 10 (a few thousand primitives, or a
-/// mesh of a million triangles in a good tree), or 8-wide ones of depth up to 4: set up
-/// for every ray, so small pays.
+/// Traversal stack for 8-wide trees of up to 4 levels (a few thousand primitives), or
+/// 4-wide ones of up to 10: set up for every ray, so small pays.
 const TINY_STACK: usize = 31;
 
 /// A node of the binary tree the SAH builds. Interior nodes (`count == 0`) have children
@@ -74,15 +73,15 @@ impl<const W: usize> Node<W> {
     /// `(plane − o)·(1/d)` is NaN only when `d` is ±0 on that axis and the origin lies on
     /// the plane; such a slab does not constrain the ray, as there: the running bounds
     /// take a product only when it is beyond them (`t0 > near`, `t1 < far`), which a NaN
-    /// never is. (That is also the operand order of the processor's `max`/`min`, so
-    /// each lane loop compiles to a few vector instructions, with no branch.) The far
-    /// distance is inflated by `1 + 2γ(3)`, as there.
+    /// never is. (That is also the operand order of the processor's `max`/`min`, so the
+    /// SIMD test of [`slab`] needs no branch.) The far distance is inflated by
+    /// `1 + 2γ(3)`, as there.
     #[inline(always)]
     fn hit(&self, w: &Walk) -> ([Real; W], u32) {
-        let mut near = [w.t_min; W];
-        let live = (1u32 << self.lanes) - 1;
         #[cfg(all(target_arch = "x86_64", not(feature = "f64")))]
         if W == 4 || (W == 8 && cfg!(target_feature = "avx")) {
+            let mut near = [w.t_min; W];
+            let live = (1u32 << self.lanes) - 1;
             // SAFETY: the node's boxes are `6 × W` contiguous `f32` (`Real` is `f32`
             // here) and `near` holds `W`; `slab` reads and writes `W` lanes exactly, and
             // it needs AVX only when `W == 8`, which is then enabled at compile time.
@@ -93,7 +92,8 @@ impl<const W: usize> Node<W> {
     }
 
     /// [`Node::hit`] as a loop over the lanes: what the SIMD test computes, operation for
-    /// operation (and what the f64 build and a build without AVX run).
+    /// operation (and what the f64 build, a build without AVX and other architectures
+    /// run; LLVM does not vectorize it well, hence [`slab`]).
     #[inline(always)]
     fn hit_lanes(&self, w: &Walk) -> ([Real; W], u32) {
         let mut near = [w.t_min; W];
@@ -179,6 +179,7 @@ unsafe fn slab<const W: usize>(b: *const f32, w: &Walk, near: *mut f32) -> u32 {
         #[cfg(not(target_feature = "avx"))]
         unreachable!("8-wide slabs need AVX");
     }
+    assert!(W == 4, "4- or 8-wide nodes only");
     // SAFETY: as the function's contract says (`W == 4`); SSE is part of x86_64.
     unsafe {
         lanes!(
@@ -210,8 +211,8 @@ pub struct Bvh<const W: usize = 8> {
     /// The root is `nodes[0]`; empty when there are no primitives.
     nodes: Vec<Node<W>>,
     bounds: Aabb,
-    /// Most stack entries a traversal can need: `W − 1` per level below the root, plus
-    /// one.
+    /// Most stack entries a traversal can need: `W − 1` per level, the root's included
+    /// (a walk holds the unvisited siblings of every node on its path).
     stack_need: usize,
 }
 
@@ -240,7 +241,7 @@ impl<const W: usize> Bvh<W> {
     /// `traversal_cost` is the cost of one binary node visit in units of one primitive
     /// test, for the SAH.
     pub fn build<T>(items: Vec<T>, boxes: &[Aabb], traversal_cost: Real) -> (Bvh<W>, Vec<T>) {
-        const { assert!(W >= 2 && W <= MAX_WIDTH) };
+        const { assert!(W == 4 || W == MAX_WIDTH, "nodes are 4 or 8 wide (bvh::slab)") };
         assert_eq!(items.len(), boxes.len(), "one box per item");
         let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
         let bvh = if boxes.is_empty() {
@@ -251,7 +252,7 @@ impl<const W: usize> Bvh<W> {
             Bvh {
                 nodes,
                 bounds: binary[0].bounds,
-                stack_need: (W - 1) * depth + 1,
+                stack_need: (W - 1) * (depth + 1),
             }
         };
         let mut slots: Vec<Option<T>> = items.into_iter().map(Some).collect();
@@ -614,7 +615,7 @@ impl Walk {
         lane: usize,
         near: Real,
     ) {
-        // The stack holds 3 entries per level below the root plus one (`stack_need`),
+        // The stack holds `W − 1` entries per level, the root's included (`stack_need`),
         // which is what a traversal can push, so it never overflows.
         stack.push(Entry {
             child: n.child[lane],
@@ -936,7 +937,9 @@ fn best_split(
     best
 }
 
-#[cfg(test)]
+// Where the node test has no SIMD form (the f64 build, another architecture; at 8 lanes
+// a build without AVX), `hit` is `hit_lanes` and there is nothing to compare.
+#[cfg(all(test, target_arch = "x86_64", not(feature = "f64")))]
 mod tests {
     use super::*;
 
@@ -1013,6 +1016,7 @@ mod tests {
     }
 
     #[test]
+    #[cfg(target_feature = "avx")]
     fn simd_node_test_matches_the_lane_loop_at_8_lanes() {
         simd_matches_lanes::<8>();
     }

@@ -712,7 +712,7 @@ fn mesh_batches_match_one_ray_at_a_time() {
 /// ones off one level at a time, so the tree is as deep as the build allows, and a ray
 /// from the origin along +x meets every box, nearest first, with the far siblings of each
 /// level waiting on the traversal stack.
-fn geometric_row(n: usize) -> (renderer::bvh::Bvh, Vec<usize>) {
+fn geometric_row<const W: usize>(n: usize) -> (renderer::bvh::Bvh<W>, Vec<usize>) {
     let boxes: Vec<renderer::aabb::Aabb> = (0..n)
         .map(|k| {
             let x = 1.25f64.powi(k as i32);
@@ -726,13 +726,22 @@ fn geometric_row(n: usize) -> (renderer::bvh::Bvh, Vec<usize>) {
 }
 
 /// Every traversal picks a fixed-capacity stack by the tree's depth (tiny, short, long);
-/// a deep tree given a shallow tree's stack would overflow it. Rows of 8 to 300 boxes make
-/// trees from a few levels deep to the build's depth limit; the ray must visit every box,
-/// alone and in a batch.
+/// a deep tree given a shallow tree's stack would overflow it (a panic). Rows of 2 to 320
+/// boxes, every count (so that every depth, and the last depth each stack serves, is
+/// built), make trees from one level to the build's depth limit, 8 and 4 wide; the ray
+/// must visit every box, alone and in a batch. (An undercounted stack, one entry short
+/// per tree, overflowed 8-wide rows of 53 to 57 and 115 to 119 boxes.)
 #[test]
 fn deep_degenerate_trees_visit_every_leaf_alone_and_in_batches() {
-    for n in [8, 30, 60, 120, 300] {
-        let (bvh, order) = geometric_row(n);
+    for n in 2..=320 {
+        visit_every_leaf::<8>(n);
+        visit_every_leaf::<4>(n);
+    }
+}
+
+fn visit_every_leaf<const W: usize>(n: usize) {
+    {
+        let (bvh, order) = geometric_row::<W>(n);
         let ray = Ray::new(Vec3::ZERO, Vec3::X);
         let mut seen = vec![0u32; n];
         let hit = bvh.traverse(&ray, 0.0, INF, false, |i, _| {
@@ -741,11 +750,11 @@ fn deep_degenerate_trees_visit_every_leaf_alone_and_in_batches() {
         });
         assert!(
             !hit,
-            "{n} boxes: nothing reported a hit, yet the walk found one"
+            "{n} boxes, {W} wide: nothing reported a hit, yet the walk found one"
         );
         assert!(
             seen.iter().all(|&c| c == 1),
-            "{n} boxes in a row: the ray along the row visited them {seen:?} times \
+            "{n} boxes in a row, {W} wide: the ray along the row visited them {seen:?} times \
              (each exactly once expected; see Bvh::traverse_leaves in renderer/src/bvh.rs)"
         );
         let rays = vec![ray; renderer::bvh::BATCH];
@@ -764,7 +773,7 @@ fn deep_degenerate_trees_visit_every_leaf_alone_and_in_batches() {
         for (r, s) in seen.iter().enumerate() {
             assert!(
                 s.iter().all(|&c| c == 1),
-                "{n} boxes in a row, batch ray {r}: visited {s:?} times (each exactly once \
+                "{n} boxes in a row, {W} wide, batch ray {r}: visited {s:?} times (each exactly once \
                  expected; see Bvh::traverse_batch_leaves in renderer/src/bvh.rs)"
             );
         }
