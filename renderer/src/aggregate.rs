@@ -103,10 +103,14 @@ impl Shape {
         }
     }
 
-    /// [`Shape::intersect_batch`] as candidates ([`Shape::candidate`]).
+    /// [`Shape::candidate`] for up to [`BATCH`] rays, each with its own `t_max`: meshes
+    /// and definitions walk their trees with the rays together (their candidates are
+    /// whole records); other shapes take the rays one by one. Each result is exactly
+    /// `candidate`'s.
     fn candidate_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real], out: &mut [Option<Hit>]) {
         match self {
-            Shape::Mesh(_) | Shape::Group(_) => self.intersect_batch(rays, t_min, t_max, out),
+            Shape::Mesh(m) => m.intersect_batch(rays, t_min, t_max, out),
+            Shape::Group(g) => g.intersect_batch::<true>(rays, t_min, t_max, out),
             _ => {
                 for ((r, &tm), o) in rays.iter().zip(t_max).zip(out.iter_mut()) {
                     *o = self.candidate(r, t_min, tm);
@@ -125,27 +129,6 @@ impl Shape {
             h.uv = shapes::sphere::uv(h.p);
         }
         h
-    }
-
-    /// [`Shape::intersect`] for up to [`BATCH`] rays, each with its own `t_max`: meshes
-    /// and definitions walk their trees with the rays together; other shapes take them
-    /// one by one. Each result is exactly `intersect`'s.
-    pub fn intersect_batch(
-        &self,
-        rays: &[Ray],
-        t_min: Real,
-        t_max: &[Real],
-        out: &mut [Option<Hit>],
-    ) {
-        match self {
-            Shape::Mesh(m) => m.intersect_batch(rays, t_min, t_max, out),
-            Shape::Group(g) => g.intersect_batch::<true>(rays, t_min, t_max, out),
-            _ => {
-                for ((r, &tm), o) in rays.iter().zip(t_max).zip(out.iter_mut()) {
-                    *o = self.intersect(r, t_min, tm);
-                }
-            }
-        }
     }
 
     /// Whether anything is hit with `t_min < t < t_max` (shadow rays).

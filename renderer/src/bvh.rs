@@ -241,7 +241,12 @@ impl<const W: usize> Bvh<W> {
     /// `traversal_cost` is the cost of one binary node visit in units of one primitive
     /// test, for the SAH.
     pub fn build<T>(items: Vec<T>, boxes: &[Aabb], traversal_cost: Real) -> (Bvh<W>, Vec<T>) {
-        const { assert!(W == 4 || W == MAX_WIDTH, "nodes are 4 or 8 wide (bvh::slab)") };
+        const {
+            assert!(
+                W == 4 || W == MAX_WIDTH,
+                "nodes are 4 or 8 wide (bvh::slab)"
+            )
+        };
         assert_eq!(items.len(), boxes.len(), "one box per item");
         let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
         let bvh = if boxes.is_empty() {
@@ -958,11 +963,13 @@ mod tests {
             let mut node = Node::<W>::EMPTY;
             let boxes: Vec<Aabb> = (0..W)
                 .map(|k| {
-                    let c = Vec3::new(u(case, 6 * k as u64), u(case, 6 * k as u64 + 1), 0.0)
-                        * 4.0
+                    let c = Vec3::new(u(case, 6 * k as u64), u(case, 6 * k as u64 + 1), 0.0) * 4.0
                         - 2.0;
                     let h = Vec3::new(u(case, 6 * k as u64 + 2), u(case, 6 * k as u64 + 3), 0.5);
-                    Aabb { min: c - h, max: c + h }
+                    Aabb {
+                        min: c - h,
+                        max: c + h,
+                    }
                 })
                 .collect();
             let lanes = 1 + (case as usize % W);

@@ -39,6 +39,12 @@ struct Candidate {
     b: [Real; 3],
 }
 
+/// The values of a per-vertex array at a triangle's three vertices.
+#[inline]
+fn pick3<T: Copy>(v: &[T], tri: [u32; 3]) -> [T; 3] {
+    tri.map(|k| v[k as usize])
+}
+
 /// Why a mesh is invalid.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
@@ -187,12 +193,7 @@ impl Mesh {
     /// The three vertices of triangle `i`.
     #[inline]
     pub fn vertices(&self, i: usize) -> [Vec3; 3] {
-        let t = self.triangles[i];
-        [
-            self.positions[t[0] as usize],
-            self.positions[t[1] as usize],
-            self.positions[t[2] as usize],
-        ]
+        pick3(&self.positions, self.triangles[i])
     }
 
     /// Closest hit. The search keeps only the closest `t` and its triangle; the hit
@@ -309,11 +310,8 @@ impl Mesh {
         let [p0, p1, p2] = self.packs[c.pack as usize].triangle(c.lane as usize);
         let tri = (self.normals.is_some() || self.uvs.is_some())
             .then(|| self.triangles[self.pack_tris[c.pack as usize][c.lane as usize] as usize]);
-        let pick3 = |v: &Vec<Vec3>| tri.map(|t| [v[t[0] as usize], v[t[1] as usize], v[t[2] as usize]]);
-        let n = self.normals.as_ref().and_then(pick3);
-        let uv = self.uvs.as_ref().and_then(|v| {
-            tri.map(|t| [v[t[0] as usize], v[t[1] as usize], v[t[2] as usize]])
-        });
+        let n = self.normals.as_deref().zip(tri).map(|(v, t)| pick3(v, t));
+        let uv = self.uvs.as_deref().zip(tri).map(|(v, t)| pick3(v, t));
         surface(
             t,
             b,
@@ -327,12 +325,8 @@ impl Mesh {
     /// Whether any triangle is hit.
     pub fn occluded(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
         let wr = WoopRay::new(ray);
-        self.bvh.traverse_leaves(
-            ray,
-            t_min,
-            t_max,
-            true,
-            |first, count, tmax| {
+        self.bvh
+            .traverse_leaves(ray, t_min, t_max, true, |first, count, tmax| {
                 let (first, count) = (first as usize / 4, count as usize);
                 for (k, pack) in self.packs[first..first + count.div_ceil(4)]
                     .iter()
@@ -343,7 +337,6 @@ impl Mesh {
                     }
                 }
                 Visit::Miss
-            },
-        )
+            })
     }
 }
