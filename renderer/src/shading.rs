@@ -39,11 +39,7 @@ pub struct Interiors {
 
 impl Default for Interiors {
     fn default() -> Self {
-        Interiors {
-            ids: [(0, 1.0); MAX_INTERIORS],
-            len: 0,
-            passes: 0,
-        }
+        Interiors::EMPTY
     }
 }
 
@@ -54,6 +50,15 @@ impl Default for Interiors {
 pub const MAX_PASS_THROUGH: u32 = 64;
 
 impl Interiors {
+    /// Inside nothing: where a camera ray starts. A path copies its list only where it
+    /// enters or leaves something (refraction, pass-through); reflection and the camera
+    /// ray share this one by reference.
+    const EMPTY: Interiors = Interiors {
+        ids: [(0, 1.0); MAX_INTERIORS],
+        len: 0,
+        passes: 0,
+    };
+
     fn top(&self) -> Option<(u64, f32)> {
         (self.len > 0).then(|| self.ids[self.len - 1])
     }
@@ -120,7 +125,7 @@ impl<'a> Shader<'a> {
         }
         match hit {
             None => self.scene.settings.background,
-            Some(hit) => self.shade(ray, &hit, 0, 1.0, &mut Interiors::default()),
+            Some(hit) => self.shade(ray, &hit, 0, 1.0, &Interiors::EMPTY),
         }
     }
 
@@ -132,7 +137,7 @@ impl<'a> Shader<'a> {
         t_min: Real,
         level: u32,
         weight: f32,
-        interiors: &mut Interiors,
+        interiors: &Interiors,
     ) -> Color {
         if self.cut_off(level, weight) {
             return Color::ZERO;
@@ -153,14 +158,7 @@ impl<'a> Shader<'a> {
         level >= s.max_depth || weight < s.adc_bailout
     }
 
-    fn shade(
-        &self,
-        ray: &Ray,
-        hit: &Hit,
-        level: u32,
-        weight: f32,
-        interiors: &mut Interiors,
-    ) -> Color {
+    fn shade(&self, ray: &Ray, hit: &Hit, level: u32, weight: f32, interiors: &Interiors) -> Color {
         let scene = self.scene;
         let m = scene.material(hit.material);
         let d = ray.d.normalize();
@@ -248,7 +246,7 @@ impl<'a> Shader<'a> {
                     level + 1
                 };
                 let (r, tmin) = self.spawn.ray(p, err, n_geo, ray.d);
-                c += fil * self.trace(&r, tmin, next, w, &mut inner);
+                c += fil * self.trace(&r, tmin, next, w, &inner);
             } else {
                 let cos_i = -d.dot(n);
                 let eta_r = eta as Real;
@@ -265,7 +263,7 @@ impl<'a> Shader<'a> {
                         inner.pop()
                     }
                     let (r, tmin) = self.spawn.ray(p, err, n_geo, dir);
-                    c += fil * self.trace(&r, tmin, level + 1, w, &mut inner);
+                    c += fil * self.trace(&r, tmin, level + 1, w, &inner);
                 }
             }
         }
@@ -290,8 +288,7 @@ impl<'a> Shader<'a> {
     ) -> Color {
         let r = (d - n * (2.0 * d.dot(n))).normalize();
         let (ray, tmin) = self.spawn.ray(p, err, n_geo, r);
-        let mut inner = *interiors;
-        self.trace(&ray, tmin, level + 1, w, &mut inner)
+        self.trace(&ray, tmin, level + 1, w, interiors)
     }
 
     /// Light reaching `p` from a light at distance `dist` along unit `l`: 0 behind an

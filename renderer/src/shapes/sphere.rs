@@ -38,7 +38,7 @@ fn solve(ray: &Ray, t_min: Real, t_max: Real) -> Option<(Real, f64, DVec3, DVec3
 
 /// Whether the ray hits the unit sphere with `t_min < t < t_max`: exactly when
 /// [`intersect`] returns a hit, without building it (shadow rays).
-#[inline]
+#[inline(always)]
 pub fn hits(ray: &Ray, t_min: Real, t_max: Real) -> bool {
     solve(ray, t_min, t_max).is_some()
 }
@@ -46,7 +46,9 @@ pub fn hits(ray: &Ray, t_min: Real, t_max: Real) -> bool {
 /// [`intersect`] without the uv (left at 0): the search for the closest hit builds this
 /// for every candidate, and [`uv`] completes the winner's record, from the same point,
 /// so the final record has the same bits (uv costs an `acos` and an `atan2`).
-#[inline]
+/// Always inlined (as [`hits`]): as a call, it read the ray its caller had just written
+/// field by field, a store-forwarding stall on every sphere tested.
+#[inline(always)]
 pub fn intersect_bare(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     let (t, side, l, d, disc64, a64) = solve(ray, t_min, t_max)?;
     // The point as l ∓ d·√disc/a, not o + t·d, which cancels when |o| ≫ 1 (an instance
