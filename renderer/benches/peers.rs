@@ -296,8 +296,9 @@ fn mesh(dir: &Path, quick: bool) {
 /// One pass of closest hit over one ray set of the mesh benchmark, on one thread, with no
 /// timing loop: for Callgrind (`valgrind --tool=callgrind --toggle-collect='peers::trace_set'
 /// BENCH profile shuffled`, BENCH being target/release/deps/peers-HASH, not its `.d` file),
-/// which then counts the traversal alone.
-fn profile(set: &str) {
+/// which then counts the traversal alone. `passes` > 1 repeats it, for a sampling profiler
+/// (`perf record -e cpu-clock`), whose samples would otherwise fall mostly in the build.
+fn profile(set: &str, passes: usize) {
     let (pos, tris) = big_mesh();
     let agg = Aggregate::new(vec![Instance {
         shape: Shape::Mesh(Arc::new(Mesh::new(pos, None, None, tris).unwrap())),
@@ -310,7 +311,10 @@ fn profile(set: &str) {
         eprintln!("no ray set {set} (coherent, shuffled, occlusion, bounce)");
         std::process::exit(2);
     };
-    let hits = trace_set(&agg, &s.rays);
+    let mut hits = 0;
+    for _ in 0..passes.max(1) {
+        hits = trace_set(&agg, &s.rays);
+    }
     println!("{set}: {} rays, {hits} hits", s.rays.len());
 }
 
@@ -414,9 +418,12 @@ fn main() {
     match args.first().map(String::as_str) {
         Some("mesh") => mesh(Path::new(args.get(1).expect("peers mesh DIR")), quick),
         Some("growth") => growth(quick),
-        Some("profile") => profile(args.get(1).map(String::as_str).unwrap_or("coherent")),
+        Some("profile") => profile(
+            args.get(1).map(String::as_str).unwrap_or("coherent"),
+            args.get(2).and_then(|n| n.parse().ok()).unwrap_or(1),
+        ),
         _ => {
-            eprintln!("usage: peers mesh DIR [--quick] | peers growth [--quick] | peers profile SET (see scripts/bench-peers.sh)");
+            eprintln!("usage: peers mesh DIR [--quick] | peers growth [--quick] | peers profile SET [PASSES] (see scripts/bench-peers.sh)");
             std::process::exit(2);
         }
     }

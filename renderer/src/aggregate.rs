@@ -76,7 +76,7 @@ impl Shape {
     }
 
     /// The closest hit with `t_min < t < t_max`, in object space.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         match self {
             Shape::Sphere => shapes::sphere::intersect(ray, t_min, t_max),
@@ -447,31 +447,34 @@ impl Aggregate {
 
     #[inline]
     fn intersect_with<const UV: bool>(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
-        let (mut best, t_max) = self.nearest_unbounded(ray, t_min, t_max);
+        let mut best = None;
+        let t_max = self.nearest_unbounded(ray, t_min, t_max, &mut best);
         self.bvh.traverse(ray, t_min, t_max, false, |k, tmax| {
             self.visit(k, ray, t_min, tmax, &mut best)
         });
         best.map(|(k, h)| self.finish::<UV>(k, h))
     }
 
-    /// The closest hit among the unbounded instances, with the interval it leaves for
-    /// the BVH.
+    /// The closest hit among the unbounded instances, into `best` (left alone when there
+    /// is none), and the end of the interval it leaves for the BVH. (It writes the
+    /// caller's record rather than returning one: a returned record was copied with wide
+    /// loads of fields just written one by one, which stalls store forwarding.)
     #[inline]
     fn nearest_unbounded(
         &self,
         ray: &Ray,
         t_min: Real,
         t_max: Real,
-    ) -> (Option<(usize, Hit)>, Real) {
-        let mut best = None;
+        best: &mut Option<(usize, Hit)>,
+    ) -> Real {
         let mut t_max = t_max;
         for (k, inst) in self.unbounded().iter().enumerate() {
             if let Some(h) = inst.local_hit(ray, t_min, t_max) {
                 t_max = h.t;
-                best = Some((self.bounded() + k, h));
+                *best = Some((self.bounded() + k, h));
             }
         }
-        (best, t_max)
+        t_max
     }
 
     /// Tests bounded instance `k` for [`Bvh::traverse`], keeping a closer hit in `best`.
@@ -552,7 +555,7 @@ impl Aggregate {
             let mut bound = [0.0; BATCH];
             let mut unbounded: [Option<(usize, Hit)>; BATCH] = [None; BATCH];
             for (r, ray) in rays.iter().enumerate() {
-                (unbounded[r], bound[r]) = self.nearest_unbounded(ray, t_min, t_max[r]);
+                bound[r] = self.nearest_unbounded(ray, t_min, t_max[r], &mut unbounded[r]);
             }
             self.instances[0].local_hit_batch(rays, t_min, &bound[..rays.len()], out);
             for (o, u) in out.iter_mut().zip(unbounded) {
@@ -567,7 +570,7 @@ impl Aggregate {
         let mut best: [Option<(usize, Hit)>; BATCH] = [None; BATCH];
         let mut bound = [0.0; BATCH];
         for (r, ray) in rays.iter().enumerate() {
-            (best[r], bound[r]) = self.nearest_unbounded(ray, t_min, t_max[r]);
+            bound[r] = self.nearest_unbounded(ray, t_min, t_max[r], &mut best[r]);
         }
         let bound = &bound[..rays.len()];
         if self.interleaves() {
