@@ -141,17 +141,19 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
                 let n = CHUNK.min(total - start);
                 for k in 0..n {
                     let (i, s) = pixel_sample(start + k);
-                    let mut smp = PixelSampler::new(kind, (j * w + i) as u64, s, spp);
                     // The classic model samples the pixel centre at 1 spp, as POV-Ray
-                    // does with antialiasing off; otherwise positions are uniform in the
-                    // pixel (a box filter, as Mitsuba's).
+                    // does with antialiasing off (and needs no sampler); otherwise
+                    // positions are uniform in the pixel (a box filter, as Mitsuba's).
                     let (dx, dy) = if classic && spp == 1 {
                         (0.5, 0.5)
                     } else {
-                        smp.next_2d()
+                        let mut smp = PixelSampler::new(kind, (j * w + i) as u64, s, spp);
+                        let d = smp.next_2d();
+                        // The physical model draws the rest of the sample from it.
+                        samplers[k] = (!classic).then_some(smp);
+                        d
                     };
                     rays[k] = scene.camera.ray_at(i as f64 + dx, j as f64 + dy);
-                    samplers[k] = Some(smp);
                 }
                 if classic {
                     scene.root.intersect_many_for_shading(

@@ -119,6 +119,9 @@ impl<'a> Shader<'a> {
 
     /// [`Shader::trace_primary`] given the ray's closest hit (from
     /// [`crate::aggregate::Aggregate::intersect_many`], which finds many at once).
+    /// Always inlined into the render loop: as a call, its colour came back through
+    /// memory, written float by float and read as a pair (a store-forwarding stall).
+    #[inline(always)]
     pub fn trace_primary_hit(&self, ray: &Ray, hit: Option<Hit>) -> Color {
         if self.cut_off(0, 1.0) {
             return Color::ZERO;
