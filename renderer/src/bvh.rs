@@ -358,7 +358,8 @@ impl<const W: usize> Bvh<W> {
     /// them (a prefetch: the child nodes, or through `leaf_ahead(first, count)` the
     /// records of the leaves), so their cache misses overlap each other and the work on
     /// the nearest child, instead of following one another. The walk, and so every
-    /// result, is the same.
+    /// result, is the same. A search for any hit starts asking only once a leaf has failed
+    /// to end it (`Walk::eager`).
     #[inline]
     pub fn traverse_leaves_prefetching<F, L>(
         &self,
@@ -419,6 +420,7 @@ impl<const W: usize> Bvh<W> {
             return matches!(visit(first, count, t_max), Visit::Hit(_));
         }
         let mut w = Walk::new(ray, t_min, t_max);
+        w.eager = !any;
         if self.stack_need <= TINY_STACK {
             let mut stack = ArrayVec::<Entry, TINY_STACK>::new();
             while w.step::<_, _, _, ALL>(&mut stack, &self.nodes, any, &mut visit, ahead) {}
@@ -609,6 +611,11 @@ struct Walk {
     child: u32,
     count: u8,
     hit: bool,
+    /// Whether a prefetching walk (`ALL`) asks for every overlapped child yet. A search
+    /// for the closest hit does from the start; a search for any hit only once a leaf has
+    /// failed to end it: a primary ray's first leaf (a ground quad near the root) usually
+    /// does, and prefetches for it would be wasted.
+    eager: bool,
 }
 
 impl Walk {
@@ -645,6 +652,7 @@ impl Walk {
             child: 0,
             count: 0,
             hit: false,
+            eager: true,
         }
     }
 
@@ -666,7 +674,7 @@ impl Walk {
         if self.count == 0 {
             let n = &nodes[self.child as usize];
             let (near, mask) = n.hit(self);
-            if ALL {
+            if ALL && self.eager {
                 let mut m = mask;
                 while m != 0 {
                     let lane = m.trailing_zeros() as usize;
@@ -739,6 +747,8 @@ impl Walk {
                     return false;
                 }
                 self.t_max = t;
+            } else {
+                self.eager = true;
             }
         }
         // Pop the next child whose box the (possibly shrunk) interval still reaches.

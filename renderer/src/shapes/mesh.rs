@@ -325,8 +325,12 @@ impl Mesh {
     /// Whether any triangle is hit.
     pub fn occluded(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
         let wr = WoopRay::new(ray);
-        self.bvh
-            .traverse_leaves(ray, t_min, t_max, true, |first, count, tmax| {
+        self.bvh.traverse_leaves_prefetching(
+            ray,
+            t_min,
+            t_max,
+            true,
+            |first, count, tmax| {
                 let (first, count) = (first as usize / 4, count as usize);
                 for (k, pack) in self.packs[first..first + count.div_ceil(4)]
                     .iter()
@@ -337,6 +341,8 @@ impl Mesh {
                     }
                 }
                 Visit::Miss
-            })
+            },
+            |first, count| self.leaf_ahead(first, count),
+        )
     }
 }
