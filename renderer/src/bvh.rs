@@ -613,8 +613,9 @@ struct Walk {
     hit: bool,
     /// Whether a prefetching walk (`ALL`) asks for every overlapped child yet. A search
     /// for the closest hit does from the start; a search for any hit only once a leaf has
-    /// failed to end it: a primary ray's first leaf (a ground quad near the root) usually
-    /// does, and prefetches for it would be wasted.
+    /// failed to end it: when the first leaf tested (leaves go first, and a large
+    /// occluder such as a ground quad sits near the root) ends the search, as it does for
+    /// most rays aimed at such a surface, prefetches would be wasted.
     eager: bool,
 }
 

@@ -64,7 +64,7 @@ fn srgb_bucket_codes() -> &'static [u8; SRGB_BUCKETS + 1] {
 
 /// The 8-bit sRGB code of a linear value in [0, 1]: the code k whose encoded value k/255
 /// is nearest to the exact sRGB encoding of `x`, that is the number of steps
-/// ([`srgb_steps`]) at or below `x`. The code of `x`'s bucket's lower end is looked up and
+/// (`srgb_steps`) at or below `x`. The code of `x`'s bucket's lower end is looked up and
 /// then advanced past the steps between that end and `x` (at most one, rarely any): the
 /// same count as a search of all 255, which took eight dependent comparisons per channel
 /// (7 % of a 1920 × 1440 Whitted frame's time). Below 0 (and NaN) gives 0, above 1 gives 255.

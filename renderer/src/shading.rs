@@ -50,9 +50,9 @@ impl Default for Interiors {
 pub const MAX_PASS_THROUGH: u32 = 64;
 
 impl Interiors {
-    /// Inside nothing: where a camera ray starts. A path copies its list only where it
-    /// enters or leaves something (refraction, pass-through); reflection and the camera
-    /// ray share this one by reference.
+    /// Inside nothing: where a camera ray starts (by reference). A path copies its list
+    /// only where it enters or leaves something (refraction, pass-through); a reflected
+    /// ray shares its parent's list by reference.
     const EMPTY: Interiors = Interiors {
         ids: [(0, 1.0); MAX_INTERIORS],
         len: 0,
