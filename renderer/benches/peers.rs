@@ -420,7 +420,14 @@ fn main() {
         Some("growth") => growth(quick),
         Some("profile") => profile(
             args.get(1).map(String::as_str).unwrap_or("coherent"),
-            args.get(2).and_then(|n| n.parse().ok()).unwrap_or(1),
+            match args.get(2).map(|n| n.parse::<usize>()) {
+                None => 1,
+                Some(Ok(n)) => n,
+                Some(Err(e)) => {
+                    eprintln!("peers profile SET [PASSES]: PASSES {:?}: {e}", args[2]);
+                    std::process::exit(2);
+                }
+            },
         ),
         _ => {
             eprintln!("usage: peers mesh DIR [--quick] | peers growth [--quick] | peers profile SET [PASSES] (see scripts/bench-peers.sh)");
