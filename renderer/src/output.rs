@@ -28,11 +28,23 @@ pub fn srgb_encode(x: f32) -> f32 {
     }
 }
 
-/// The 255 linear values at which the nearest 8-bit sRGB code changes (the decoded
-/// half-codes, computed once in f64), ascending.
-fn srgb_steps() -> &'static [f32; 255] {
-    static STEPS: std::sync::LazyLock<[f32; 255]> = std::sync::LazyLock::new(|| {
-        std::array::from_fn(|k| {
+/// Buckets of [0, 1] for [`srgb8`]'s first guess. The steps are at least 3·10⁻⁴ apart (the
+/// linear segment's), more than a bucket's width, so at most one step lies inside a bucket.
+const SRGB_BUCKETS: usize = 4096;
+
+/// What [`srgb8`] reads, built once.
+struct SrgbTable {
+    /// The 255 linear values at which the nearest 8-bit sRGB code changes (the decoded
+    /// half-codes, computed in f64), ascending.
+    steps: [f32; 255],
+    /// For each bucket `b`, the code of its lower end `b / SRGB_BUCKETS`: the number of
+    /// steps at or below it.
+    codes: [u8; SRGB_BUCKETS + 1],
+}
+
+fn srgb_table() -> &'static SrgbTable {
+    static TABLE: std::sync::LazyLock<SrgbTable> = std::sync::LazyLock::new(|| {
+        let steps: [f32; 255] = std::array::from_fn(|k| {
             let e = (k as f64 + 0.5) / 255.0;
             let linear = if e <= 0.04045 {
                 e / 12.92
@@ -40,40 +52,29 @@ fn srgb_steps() -> &'static [f32; 255] {
                 ((e + 0.055) / 1.055).powf(2.4)
             };
             linear as f32
-        })
-    });
-    &STEPS
-}
-
-/// Buckets of [0, 1] for [`srgb8`]'s first guess. The steps are at least 3·10⁻⁴ apart (the
-/// linear segment's), more than a bucket's width, so at most one step lies inside a bucket.
-const SRGB_BUCKETS: usize = 4096;
-
-/// For each bucket `b`, the code of its lower end `b / SRGB_BUCKETS`: the number of steps at
-/// or below it.
-fn srgb_bucket_codes() -> &'static [u8; SRGB_BUCKETS + 1] {
-    static CODES: std::sync::LazyLock<[u8; SRGB_BUCKETS + 1]> = std::sync::LazyLock::new(|| {
-        let steps = srgb_steps();
-        std::array::from_fn(|b| {
+        });
+        let codes = std::array::from_fn(|b| {
             let lower = b as f32 / SRGB_BUCKETS as f32;
             steps.partition_point(|&t| t <= lower) as u8
-        })
+        });
+        SrgbTable { steps, codes }
     });
-    &CODES
+    &TABLE
 }
 
 /// The 8-bit sRGB code of a linear value in [0, 1]: the code k whose encoded value k/255
 /// is nearest to the exact sRGB encoding of `x`, that is the number of steps
-/// (`srgb_steps`) at or below `x`. The code of `x`'s bucket's lower end is looked up and
-/// then advanced past the steps between that end and `x` (at most one, rarely any): the
-/// same count as a search of all 255, which took eight dependent comparisons per channel
-/// (7 % of a 1920 × 1440 Whitted frame's time). Below 0 (and NaN) gives 0, above 1 gives 255.
+/// (`SrgbTable::steps`) at or below `x`. The code of `x`'s bucket's lower end is looked up
+/// and then advanced past the steps between that end and `x` (at most one, rarely any):
+/// the same count as a search of all 255, which took eight dependent comparisons per
+/// channel (7 % of a 1920 × 1440 Whitted frame's time). Below 0 (and NaN) gives 0, above 1
+/// gives 255.
 pub fn srgb8(x: f32) -> u8 {
-    let steps = srgb_steps();
+    let table = srgb_table();
     // x·4096 is exact (a power of two), so the bucket's lower end is never above x.
     let b = ((x * SRGB_BUCKETS as f32) as usize).min(SRGB_BUCKETS);
-    let mut k = srgb_bucket_codes()[b] as usize;
-    while k < steps.len() && steps[k] <= x {
+    let mut k = table.codes[b] as usize;
+    while k < table.steps.len() && table.steps[k] <= x {
         k += 1;
     }
     k as u8
@@ -320,7 +321,7 @@ mod srgb_tests {
 
     /// The search of all 255 steps that [`srgb8`] shortcuts.
     fn searched(x: f32) -> u8 {
-        srgb_steps().partition_point(|&t| t <= x) as u8
+        srgb_table().steps.partition_point(|&t| t <= x) as u8
     }
 
     #[test]
@@ -338,7 +339,7 @@ mod srgb_tests {
             f32::EPSILON,
         ];
         // Each step and its neighbours, where the code changes.
-        for &t in srgb_steps() {
+        for &t in &srgb_table().steps {
             xs.extend([t.next_down(), t, t.next_up()]);
         }
         // Each bucket's ends.
@@ -352,7 +353,7 @@ mod srgb_tests {
             assert_eq!(
                 srgb8(x),
                 searched(x),
-                "srgb8({x:e}) (bits {:#x}) differs from the search of all steps: see srgb_bucket_codes",
+                "srgb8({x:e}) (bits {:#x}) differs from the search of all steps: see SrgbTable::codes",
                 x.to_bits()
             );
         }
