@@ -5,10 +5,12 @@
 //! - `stratified`: each dimension (pairs of dimensions when spp is a perfect square) is cut
 //!   into spp strata; sample k takes a stratum through a per-(pixel, dimension) random
 //!   permutation and jitters inside it.
-//! - `sobol`: the (0,2)-sequence formed by the first two Sobol dimensions, Owen-style
-//!   scrambled by a random XOR per (pixel, dimension pair) and with the sample index
+//! - `sobol`: the (0,2)-sequence formed by the first two Sobol dimensions, Owen-scrambled
+//!   (nested uniform scrambling, by a hash per (pixel, dimension): Burley 2020, "Practical
+//!   hash-based Owen scrambling", with Vegdahl's 2021 constants) and with the sample index
 //!   shuffled per dimension pair (Kollig and Keller 2002, "Efficient multidimensional
-//!   sampling"): low discrepancy in every pair of dimensions.
+//!   sampling"): low discrepancy in every pair of dimensions, and each point uniformly
+//!   random inside its elementary intervals, which a random XOR (a digital shift) is not.
 
 /// Which sampler places the samples.
 #[derive(
@@ -121,6 +123,24 @@ fn sobol2(i: u32) -> (u32, u32) {
     (a, b)
 }
 
+/// Owen's nested uniform scrambling of a 32-bit fraction, keyed by `seed`: the value's
+/// bits are reversed, so that its most significant digit is the lowest bit, then put
+/// through a hash in which each bit can flip only as a function of the bits below it (an
+/// addition, multiplications by odd numbers, and XORs with multiples by even numbers carry
+/// only upwards), and reversed back. So the flip of each digit depends on the digits above
+/// it alone: every elementary interval is mapped onto one of the same size, and a (0, m,
+/// 2)-net stays one.
+#[inline]
+fn owen(x: u32, seed: u32) -> u32 {
+    let mut v = x.reverse_bits();
+    v ^= v.wrapping_mul(0x3d20_adea);
+    v = v.wrapping_add(seed);
+    v = v.wrapping_mul((seed >> 16) | 1);
+    v ^= v.wrapping_mul(0x0552_6c56);
+    v ^= v.wrapping_mul(0x53a2_2864);
+    v.reverse_bits()
+}
+
 /// The samples of one pixel sample: call [`PixelSampler::next_2d`] and
 /// [`PixelSampler::next_1d`] in a fixed order per path.
 #[derive(Clone, Debug)]
@@ -166,7 +186,7 @@ impl PixelSampler {
                 let key = self.key(d);
                 let i = permute(self.sample, self.spp, key as u32);
                 let (a, _) = sobol2(i);
-                ((a ^ (key >> 32) as u32) as f64) * (1.0 / 4_294_967_296.0)
+                (owen(a, (key >> 32) as u32) as f64) * (1.0 / 4_294_967_296.0)
             }
         }
     }
@@ -193,9 +213,9 @@ impl PixelSampler {
                 let key = self.key(d);
                 let i = permute(self.sample, self.spp, key as u32);
                 let (a, b) = sobol2(i);
-                let (sa, sb) = ((key >> 32) as u32, key as u32 ^ 0x9e37_79b9);
+                let (sa, sb) = ((key >> 32) as u32, mix64(key) as u32);
                 let s = 1.0 / 4_294_967_296.0;
-                ((a ^ sa) as f64 * s, (b ^ sb) as f64 * s)
+                (owen(a, sa) as f64 * s, owen(b, sb) as f64 * s)
             }
         }
     }
@@ -279,6 +299,53 @@ mod tests {
                             at("2D coordinate", x, strata(&dims[x], spp as usize));
                             at("2D coordinate", y, strata(&dims[y], spp as usize));
                         }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Sobol's 2D points at spp = 2^m are a (0, m, 2)-net after scrambling: every
+    /// elementary box of 2^-a × 2^-(m-a) holds exactly one of them, for each a. And Owen's
+    /// scrambling places each point at random inside its box: a 1D number's offsets inside
+    /// its strata of width 1/spp differ from sample to sample, where a digital shift (one
+    /// XOR for all samples) would give them all the same offset, a shifted lattice.
+    #[test]
+    fn sobol_points_are_an_owen_scrambled_net() {
+        for m in [1u32, 2, 4, 6, 8] {
+            let spp = 1u32 << m;
+            for pixel in [0u64, 3, 99991, u64::MAX] {
+                let dims = dimensions(SamplerKind::Sobol, pixel, spp);
+                for (x, y) in TWO_D {
+                    for a in 0..=m {
+                        let (nx, ny) = (1usize << a, 1usize << (m - a));
+                        let mut seen = vec![0u32; spp as usize];
+                        for s in 0..spp as usize {
+                            let cx = (dims[x][s] * nx as f64) as usize;
+                            let cy = (dims[y][s] * ny as f64) as usize;
+                            seen[cy * nx + cx] += 1;
+                        }
+                        assert!(
+                            seen.iter().all(|&c| c == 1),
+                            "Sobol, {spp} spp, pixel {pixel}, call positions ({x}, {y}): boxes \
+                             of {nx} x {ny} hold {seen:?} points (one each expected: the \
+                             scrambling must keep the (0, m, 2)-net; renderer/src/sampler.rs owen)"
+                        );
+                    }
+                }
+                if spp >= 4 {
+                    for k in ONE_D.into_iter().chain(TWO_D.into_iter().map(|(x, _)| x)) {
+                        let mut offsets: Vec<f64> =
+                            dims[k].iter().map(|v| (v * spp as f64).fract()).collect();
+                        offsets.sort_by(f64::total_cmp);
+                        offsets.dedup();
+                        assert!(
+                            offsets.len() > spp as usize / 2,
+                            "Sobol, {spp} spp, pixel {pixel}, call position {k}: only \
+                             {} distinct offsets inside the strata (a digital shift, not \
+                             Owen's scrambling; renderer/src/sampler.rs owen)",
+                            offsets.len()
+                        );
                     }
                 }
             }
