@@ -351,7 +351,7 @@ impl Aggregate {
             .enumerate()
             .partition(|(_, inst)| inst.bounds().is_finite());
         let boxes: Vec<Aabb> = bounded.iter().map(|(_, i)| i.bounds()).collect();
-        let (bvh, mut tagged) = Bvh::<8>::build(bounded, &boxes, TRAVERSAL_COST);
+        let (bvh, mut tagged) = Bvh::<8>::build_spread(bounded, &boxes, TRAVERSAL_COST);
         let leads = tagged.iter().map(|(_, i)| Lead::of(i)).collect();
         tagged.extend(unbounded);
         let mut scene_order = vec![0u32; tagged.len()];

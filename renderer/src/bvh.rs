@@ -241,6 +241,31 @@ impl<const W: usize> Bvh<W> {
     /// `traversal_cost` is the cost of one binary node visit in units of one primitive
     /// test, for the SAH.
     pub fn build<T>(items: Vec<T>, boxes: &[Aabb], traversal_cost: Real) -> (Bvh<W>, Vec<T>) {
+        Bvh::build_with(items, boxes, traversal_cost, false)
+    }
+
+    /// [`Bvh::build`] that may also spread a set of at most `W` primitives over one node,
+    /// a leaf of one per lane, when the SAH finds that cheaper than a leaf of them all:
+    /// the node's box test then spares a ray the primitives whose boxes it misses. The
+    /// binary SAH cannot see that gain when the boxes are thin and far apart, as the walls
+    /// of a room are (any two of them span the whole room, so every binary split looks as
+    /// dear as the leaf). For instances, whose tests (a ray transform and a shape) cost far
+    /// more than a lane of a node's test; a mesh's packs of four triangles are tested
+    /// together and keep [`Bvh::build`].
+    pub fn build_spread<T>(
+        items: Vec<T>,
+        boxes: &[Aabb],
+        traversal_cost: Real,
+    ) -> (Bvh<W>, Vec<T>) {
+        Bvh::build_with(items, boxes, traversal_cost, true)
+    }
+
+    fn build_with<T>(
+        items: Vec<T>,
+        boxes: &[Aabb],
+        traversal_cost: Real,
+        spread: bool,
+    ) -> (Bvh<W>, Vec<T>) {
         const {
             assert!(
                 W == 4 || W == MAX_WIDTH,
@@ -252,7 +277,12 @@ impl<const W: usize> Bvh<W> {
         let bvh = if boxes.is_empty() {
             Bvh::default()
         } else {
-            let binary = build_binary(&mut order, boxes, traversal_cost);
+            let binary = build_binary(
+                &mut order,
+                boxes,
+                traversal_cost,
+                if spread { W } else { 0 },
+            );
             let (nodes, depth) = collapse::<W>(&binary);
             Bvh {
                 nodes,
@@ -768,8 +798,16 @@ impl Walk {
 }
 
 /// The binary SAH tree over `order` (primitive indices, permuted in place into leaf
-/// order); the root is node 0.
-fn build_binary(order: &mut [u32], boxes: &[Aabb], traversal_cost: Real) -> Vec<Node2> {
+/// order); the root is node 0. A set of at most `spread` primitives (0: never) is split
+/// down to leaves of one when one node over them all, a lane each, costs less by the SAH
+/// than both a leaf and the best binary split ([`Bvh::build_spread`]); collapsing then
+/// gathers them into one node.
+fn build_binary(
+    order: &mut [u32],
+    boxes: &[Aabb],
+    traversal_cost: Real,
+    spread: usize,
+) -> Vec<Node2> {
     let centroids: Vec<Vec3> = boxes.iter().map(|b| b.centroid()).collect();
     let mut nodes = Vec::with_capacity(2 * order.len());
     nodes.push(Node2 {
@@ -777,9 +815,9 @@ fn build_binary(order: &mut [u32], boxes: &[Aabb], traversal_cost: Real) -> Vec<
         first: 0,
         count: 0,
     });
-    // Work list of (node, start, end, depth).
-    let mut work = vec![(0usize, 0usize, order.len(), 0usize)];
-    while let Some((node, start, end, depth)) = work.pop() {
+    // Work list of (node, start, end, depth, split down to leaves of one).
+    let mut work = vec![(0usize, 0usize, order.len(), 0usize, false)];
+    while let Some((node, start, end, depth, mut single)) = work.pop() {
         let mut bounds = Aabb::EMPTY;
         let mut cbounds = Aabb::EMPTY;
         for &i in &order[start..end] {
@@ -795,40 +833,49 @@ fn build_binary(order: &mut [u32], boxes: &[Aabb], traversal_cost: Real) -> Vec<
         let split = if count <= 1 || depth >= MAX_DEPTH {
             None
         } else {
-            best_split(
+            let best = best_split(
                 &order[start..end],
                 boxes,
                 &centroids,
                 &cbounds,
                 &bounds,
                 traversal_cost,
-            )
-            .filter(|&(_, _, cost)| count > MAX_LEAF || cost < count as Real)
-            .map(|(axis, split_pos, _)| {
-                // Partition in place by bin.
-                let slice = &mut order[start..end];
-                let mut mid = 0;
-                for k in 0..slice.len() {
-                    if bin_of(centroids[slice[k] as usize][axis], &cbounds, axis) < split_pos {
-                        slice.swap(k, mid);
-                        mid += 1;
+            );
+            if !single && count <= spread {
+                let area = bounds.area().max(Real::MIN_POSITIVE);
+                let lanes: Real = order[start..end]
+                    .iter()
+                    .map(|&i| boxes[i as usize].area() / area)
+                    .sum();
+                let flat = traversal_cost + lanes;
+                single = flat < count as Real && best.is_none_or(|(_, _, cost)| flat < cost);
+            }
+            best.filter(|&(_, _, cost)| single || count > MAX_LEAF || cost < count as Real)
+                .map(|(axis, split_pos, _)| {
+                    // Partition in place by bin.
+                    let slice = &mut order[start..end];
+                    let mut mid = 0;
+                    for k in 0..slice.len() {
+                        if bin_of(centroids[slice[k] as usize][axis], &cbounds, axis) < split_pos {
+                            slice.swap(k, mid);
+                            mid += 1;
+                        }
                     }
-                }
-                mid
-            })
-            .filter(|&mid| mid > 0 && mid < count)
+                    mid
+                })
+                .filter(|&mid| mid > 0 && mid < count)
         };
         let mid = match split {
             Some(mid) => mid,
-            None if count > LEAF_LIMIT => count / 2,
+            None if count > LEAF_LIMIT || (single && count > 1 && depth < MAX_DEPTH) => count / 2,
             None => continue,
         };
         let left = nodes.len();
         nodes.extend([nodes[node]; 2]);
         nodes[node].first = left as u32;
         nodes[node].count = 0;
-        work.push((left + 1, start + mid, end, depth + 1));
-        work.push((left, start, start + mid, depth + 1));
+        work.push((left + 1, start + mid, end, depth + 1, single));
+        work.push((left, start, start + mid, depth + 1, single));
     }
     nodes
 }

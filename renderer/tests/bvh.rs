@@ -779,3 +779,51 @@ fn visit_every_leaf<const W: usize>(n: usize) {
         }
     }
 }
+
+/// The six walls of a room, as instances see them: thin boxes, any two of which span the
+/// whole room. `Bvh::build_spread` puts them in one node, a wall per lane, so a ray from
+/// the middle tests only the wall it faces; `Bvh::build` leaves them in leaves of three
+/// (every binary split looks as dear as a leaf to the SAH), where the ray tests three.
+#[test]
+fn spread_walls_cost_a_ray_one_test() {
+    let wall = |axis: usize, side: f64| {
+        let (mut lo, mut hi) = (DVec3::splat(-1.0), DVec3::splat(1.0));
+        lo[axis] = side;
+        hi[axis] = side;
+        renderer::aabb::Aabb::from_points(vec3(lo), vec3(hi))
+    };
+    let boxes: Vec<renderer::aabb::Aabb> = (0..6)
+        .map(|k| wall(k / 2, if k % 2 == 0 { -1.0 } else { 1.0 }))
+        .collect();
+    let spread = renderer::bvh::Bvh::<8>::build_spread((0..6usize).collect(), &boxes, 1.0);
+    let plain = renderer::bvh::Bvh::<8>::build((0..6usize).collect(), &boxes, 1.0);
+    let tests = |(bvh, order): &(renderer::bvh::Bvh<8>, Vec<usize>), d: DVec3| {
+        let ray = Ray::new(Vec3::ZERO, vec3(d));
+        let mut tested = Vec::new();
+        bvh.traverse(&ray, 0.0, INF, false, |i, _| {
+            tested.push(order[i as usize]);
+            // Each wall is hit at distance 1 along an axis direction.
+            Visit::Hit(1.0)
+        });
+        tested
+    };
+    for k in 0..6 {
+        let mut d = DVec3::ZERO;
+        d[k / 2] = if k % 2 == 0 { -1.0 } else { 1.0 };
+        let s = tests(&spread, d);
+        assert_eq!(
+            s,
+            vec![k],
+            "a ray from the middle of the room along {d}: build_spread tested walls {s:?}, \
+             only the one it faces ({k}) expected (renderer/src/bvh.rs build_binary)"
+        );
+        let p = tests(&plain, d);
+        assert!(
+            p.len() > 1 && p.contains(&k),
+            "along {d}, the plain build tested {p:?}: a leaf of several walls expected \
+             (if the SAH now spreads them itself, this test and Bvh::build_spread need a \
+             look)"
+        );
+    }
+    assert_eq!(spread.0.node_count(), 1, "one node holds the six walls");
+}
