@@ -147,11 +147,17 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
                     let (dx, dy) = if classic && spp == 1 {
                         (0.5, 0.5)
                     } else {
-                        let mut smp = PixelSampler::new(kind, (j * w + i) as u64, s, spp);
-                        let d = smp.next_2d();
-                        // The physical model draws the rest of the sample from it.
-                        samplers[k] = (!classic).then_some(smp);
-                        d
+                        let smp = PixelSampler::new(kind, (j * w + i) as u64, s, spp);
+                        if classic {
+                            let mut smp = smp;
+                            smp.next_2d()
+                        } else {
+                            // The physical model draws the rest of the sample from it. (Made
+                            // in its slot: a sampler advanced by the call and then copied
+                            // into the slot was read back in pieces of other widths than
+                            // the call wrote, which stalls store forwarding.)
+                            samplers[k].insert(smp).next_2d()
+                        }
                     };
                     rays[k] = scene.camera.ray_at(i as f64 + dx, j as f64 + dy);
                 }

@@ -45,7 +45,19 @@ pub fn mix64(mut z: u64) -> u64 {
 
 #[inline]
 fn hash3(a: u64, b: u64, c: u64) -> u64 {
-    mix64(mix64(mix64(a ^ 0x9e37_79b9_7f4a_7c15).wrapping_add(b)).wrapping_add(c))
+    hash_mixed(mix_first(a), b, c)
+}
+
+/// [`hash3`]'s first step, which depends on `a` alone: a sampler does it once per pixel.
+#[inline]
+fn mix_first(a: u64) -> u64 {
+    mix64(a ^ 0x9e37_79b9_7f4a_7c15)
+}
+
+/// [`hash3`] from `mix_first(a)`.
+#[inline]
+fn hash_mixed(first: u64, b: u64, c: u64) -> u64 {
+    mix64(mix64(first.wrapping_add(b)).wrapping_add(c))
 }
 
 #[inline]
@@ -146,7 +158,12 @@ fn owen(x: u32, seed: u32) -> u32 {
 #[derive(Clone, Debug)]
 pub struct PixelSampler {
     kind: SamplerKind,
-    pixel: u64,
+    /// `mix_first(pixel)`, the part of every hash that the pixel alone decides.
+    pixel_mix: u64,
+    /// For the independent sampler, `mix64(pixel_mix + sample)`: the hash of (pixel,
+    /// sample) that each dimension finishes with one more mix (the same bits as
+    /// [`uniform`]).
+    sample_mix: u64,
     sample: u32,
     spp: u32,
     dim: u32,
@@ -157,9 +174,15 @@ impl PixelSampler {
     /// Sample `sample` of `spp` in pixel `pixel`.
     pub fn new(kind: SamplerKind, pixel: u64, sample: u32, spp: u32) -> Self {
         let root = (spp as f64).sqrt().round() as u32;
+        let pixel_mix = mix_first(pixel);
         PixelSampler {
             kind,
-            pixel,
+            pixel_mix,
+            sample_mix: if kind == SamplerKind::Independent {
+                mix64(pixel_mix.wrapping_add(sample as u64))
+            } else {
+                0
+            },
             sample,
             spp,
             dim: 0,
@@ -168,7 +191,7 @@ impl PixelSampler {
     }
 
     fn key(&self, dim: u32) -> u64 {
-        hash3(self.pixel, 0x5eed_0000 + dim as u64, self.kind as u64)
+        hash_mixed(self.pixel_mix, 0x5eed_0000 + dim as u64, self.kind as u64)
     }
 
     /// The next number in [0, 1).
@@ -176,7 +199,7 @@ impl PixelSampler {
         let d = self.dim;
         self.dim += 1;
         match self.kind {
-            SamplerKind::Independent => uniform(self.pixel, self.sample as u64, d as u64),
+            SamplerKind::Independent => to_unit(mix64(self.sample_mix.wrapping_add(d as u64))),
             SamplerKind::Stratified => {
                 let key = self.key(d);
                 let stratum = permute(self.sample, self.spp, key as u32);
@@ -418,6 +441,25 @@ mod tests {
                         "{kind:?}: call positions {a} and {b} are correlated (r = {r:.3} over \
                          {n} samples; each dimension needs its own key and the counter must \
                          advance past a 2D point; renderer/src/sampler.rs)"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The independent sampler's numbers are [`uniform`]'s for (pixel, sample,
+    /// dimension), though it hashes the pixel and the sample once, not per number.
+    #[test]
+    fn independent_samples_are_the_uniform_hash() {
+        for pixel in [0u64, 9, 1 << 40, u64::MAX] {
+            for sample in [0u32, 1, 77, u32::MAX] {
+                let mut smp = PixelSampler::new(SamplerKind::Independent, pixel, sample, 128);
+                for dim in 0..8u64 {
+                    assert_eq!(
+                        smp.next_1d().to_bits(),
+                        uniform(pixel, sample as u64, dim).to_bits(),
+                        "pixel {pixel}, sample {sample}, dimension {dim} \
+                         (renderer/src/sampler.rs PixelSampler::new)"
                     );
                 }
             }
