@@ -6,6 +6,7 @@ use crate::aggregate::Instance;
 use crate::aggregate::Shape;
 use crate::material::Color;
 use crate::real::{Real, Vec3};
+use crate::sampler::cos_sin_turn;
 use crate::transform::Transform;
 use glam::DVec3;
 use serde::Deserialize;
@@ -151,9 +152,9 @@ impl AreaLight {
                 let cos_a = sin2 * d / r + cos_t * (1.0 - sin2 * d * d / (r * r)).max(0.0).sqrt();
                 let cos_a = cos_a.clamp(-1.0, 1.0);
                 let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
-                let phi = 2.0 * PI * u.1;
+                let (cos_phi, sin_phi) = cos_sin_turn(u.1);
                 let (t, b) = frame(-axis);
-                let n = (t * phi.cos() + b * phi.sin()) * sin_a - axis * cos_a;
+                let n = (t * cos_phi + b * sin_phi) * sin_a - axis * cos_a;
                 // The normal's direction (hits report m⁻ᵀ·n_obj, which for a similarity
                 // of scale r is this over r; only its direction is used).
                 (
@@ -225,8 +226,8 @@ impl AreaLight {
             Shape::Sphere => {
                 let z = 1.0 - 2.0 * u.0;
                 let r = (1.0 - z * z).max(0.0).sqrt();
-                let phi = 2.0 * PI * u.1;
-                let v = Vec3::new((r * phi.cos()) as Real, z as Real, (r * phi.sin()) as Real);
+                let (cos_phi, sin_phi) = cos_sin_turn(u.1);
+                let v = Vec3::new((r * cos_phi) as Real, z as Real, (r * sin_phi) as Real);
                 (v, v)
             }
             _ => (

@@ -17,7 +17,7 @@ use crate::hit::Hit;
 use crate::light::frame;
 use crate::ray::Ray;
 use crate::real::{Real, Vec3};
-use crate::sampler::PixelSampler;
+use crate::sampler::{cos_sin_turn, PixelSampler};
 use crate::scene::{Color, Integrator, LightKind, Material, MaterialModel, Scene};
 use crate::spawn::Spawn;
 use std::f64::consts::PI;
@@ -113,10 +113,10 @@ impl Surface<'_> {
             MaterialModel::Diffuse => {
                 let (u1, u2) = s.next_2d();
                 let r = u1.sqrt();
-                let phi = 2.0 * PI * u2;
+                let (cos_phi, sin_phi) = cos_sin_turn(u2);
                 let (t, b) = frame(n);
                 let local_z = (1.0 - u1).max(0.0).sqrt();
-                let dir = t * (r * phi.cos()) + b * (r * phi.sin()) + n * local_z;
+                let dir = t * (r * cos_phi) + b * (r * sin_phi) + n * local_z;
                 let (f, pdf) = self.eval_diffuse(wo, dir);
                 if pdf <= 0.0 {
                     return None;
@@ -285,8 +285,8 @@ impl<'a> PhysicalIntegrator<'a> {
                     let (u1, u2) = smp.next_2d();
                     let z = 1.0 - 2.0 * u1;
                     let r = (1.0 - z * z).max(0.0).sqrt();
-                    let phi = 2.0 * PI * u2;
-                    let wi = glam::DVec3::new(r * phi.cos(), r * phi.sin(), z);
+                    let (cos_phi, sin_phi) = cos_sin_turn(u2);
+                    let wi = glam::DVec3::new(r * cos_phi, r * sin_phi, z);
                     let pdf_l = 1.0 / (4.0 * PI);
                     let (f, pdf_b) = self.eval_light(s, wo, wi);
                     if f != glam::DVec3::ZERO && !self.occluded(s, wi, f64::INFINITY) {

@@ -71,6 +71,58 @@ pub fn uniform(pixel: u64, sample: u64, dim: u64) -> f64 {
     to_unit(hash3(pixel, sample, dim))
 }
 
+/// `(cos 2πu, sin 2πu)` for `u` in [0, 1): the azimuth of a sampled direction. Written
+/// out in plain arithmetic, so that it costs no call into the system's maths library (whose
+/// `sincos` took 7 % of a physical render) and gives the same bits on every machine.
+/// `8u` splits into an octant `k` and a fraction `f`; the angle inside the octant,
+/// `x = f·π/4` (or `(1 − f)·π/4` in the odd octants, measured from the octant's far
+/// end), is at most π/4, where Taylor series to x¹⁵ and x¹⁶ are within 5·10⁻¹⁷ of sin x
+/// and cos x; the octant then swaps the pair and sets their signs, with no branch.
+#[inline]
+pub fn cos_sin_turn(u: f64) -> (f64, f64) {
+    let v = u * 8.0;
+    let k = v.floor();
+    let f = v - k;
+    let k = k as i64 as u64 & 7;
+    let odd = k & 1 == 1;
+    let x = if odd { 1.0 - f } else { f } * std::f64::consts::FRAC_PI_4;
+    let x2 = x * x;
+    // Horner from the highest term: sin x = x(1 − x²/3! + x⁴/5! − ...), cos x = 1 − x²/2! + ...
+    const SIN: [f64; 8] = [
+        -1.0 / 1_307_674_368_000.0,
+        1.0 / 6_227_020_800.0,
+        -1.0 / 39_916_800.0,
+        1.0 / 362_880.0,
+        -1.0 / 5_040.0,
+        1.0 / 120.0,
+        -1.0 / 6.0,
+        1.0,
+    ];
+    const COS: [f64; 9] = [
+        1.0 / 20_922_789_888_000.0,
+        -1.0 / 87_178_291_200.0,
+        1.0 / 479_001_600.0,
+        -1.0 / 3_628_800.0,
+        1.0 / 40_320.0,
+        -1.0 / 720.0,
+        1.0 / 24.0,
+        -1.0 / 2.0,
+        1.0,
+    ];
+    let s = x * SIN[1..].iter().fold(SIN[0], |acc, &c| acc.mul_add(x2, c));
+    let c = COS[1..].iter().fold(COS[0], |acc, &c| acc.mul_add(x2, c));
+    // Octants 1, 2, 5 and 6 swap the pair (the angle is π/2 away from the octant's x);
+    // the cosine is negative in octants 2 to 5, the sine in 4 to 7.
+    let swap = (k + 1) & 2 != 0;
+    let (a, b) = if swap { (s, c) } else { (c, s) };
+    let neg_cos = ((k + 2) & 4) << 61;
+    let neg_sin = (k & 4) << 61;
+    (
+        f64::from_bits(a.to_bits() ^ neg_cos),
+        f64::from_bits(b.to_bits() ^ neg_sin),
+    )
+}
+
 /// A random permutation of `0..n` evaluated at `i` (Kensler's "Correlated multi-jittered
 /// sampling", 2013, permute()), keyed by `key`.
 #[inline]
@@ -444,6 +496,35 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// `cos_sin_turn` agrees with the maths library's cosine and sine of 2πu within
+    /// 10⁻¹⁵ over [0, 1) (every octant, both ends of each, and a dense sweep; the library's
+    /// own argument, 2π·u rounded, is up to 7·10⁻¹⁶ off), and its pair stays on the unit
+    /// circle.
+    #[test]
+    fn cos_sin_turn_matches_the_library() {
+        let mut us: Vec<f64> = (0..200_000).map(|i| i as f64 / 200_000.0).collect();
+        for k in 0..8 {
+            let e = k as f64 / 8.0;
+            us.extend([e, e + 1e-12, (e + 0.125) * (1.0 - f64::EPSILON), e + 0.0625]);
+        }
+        us.push(1.0 - f64::EPSILON / 2.0);
+        for u in us {
+            let (c, s) = cos_sin_turn(u);
+            let phi = 2.0 * std::f64::consts::PI * u;
+            assert!(
+                (c - phi.cos()).abs() < 1e-15 && (s - phi.sin()).abs() < 1e-15,
+                "u = {u}: cos_sin_turn gives ({c}, {s}), the library ({}, {}) \
+                 (renderer/src/sampler.rs cos_sin_turn: octant signs or series)",
+                phi.cos(),
+                phi.sin()
+            );
+            assert!(
+                (c * c + s * s - 1.0).abs() < 1e-15,
+                "u = {u}: off the circle"
+            );
         }
     }
 
