@@ -449,8 +449,7 @@ impl<const W: usize> Bvh<W> {
             }
             return matches!(visit(first, count, t_max), Visit::Hit(_));
         }
-        let mut w = Walk::new(ray, t_min, t_max);
-        w.eager = !any;
+        let mut w = Walk::new(ray, t_min, t_max, !any);
         if self.stack_need <= TINY_STACK {
             let mut stack = ArrayVec::<Entry, TINY_STACK>::new();
             while w.step::<_, _, _, ALL>(&mut stack, &self.nodes, any, &mut visit, ahead) {}
@@ -539,7 +538,7 @@ impl<const W: usize> Bvh<W> {
         // Slots past the last ray start inactive and are never stepped.
         let mut walks: [Walk; BATCH] = std::array::from_fn(|r| {
             let k = r.min(rays.len() - 1);
-            Walk::new(&rays[k], t_min, t_max[k])
+            Walk::new(&rays[k], t_min, t_max[k], true)
         });
         let mut stacks: [ArrayVec<Entry, STACK>; BATCH] = std::array::from_fn(|_| ArrayVec::new());
         let mut active: u64 = (1u64 << rays.len()) - 1;
@@ -667,8 +666,10 @@ impl Walk {
         });
     }
 
+    /// A walk of `ray` over `(t_min, t_max)`; `eager` as [`Walk::eager`] starts: true for
+    /// a search for the closest hit, false for any hit.
     #[inline]
-    fn new(ray: &Ray, t_min: Real, t_max: Real) -> Self {
+    fn new(ray: &Ray, t_min: Real, t_max: Real, eager: bool) -> Self {
         let inv = Vec3::ONE / ray.d;
         Walk {
             near: [
@@ -683,7 +684,7 @@ impl Walk {
             child: 0,
             count: 0,
             hit: false,
-            eager: true,
+            eager,
         }
     }
 
@@ -1051,7 +1052,7 @@ mod tests {
                 4 => d = Vec3::new(boxes[0].max.x, boxes[0].min.y, boxes[0].max.z) - o,
                 _ => {}
             }
-            let w = Walk::new(&Ray::new(o, d), 0.0, 4.0 * u(case, 106) + 0.5);
+            let w = Walk::new(&Ray::new(o, d), 0.0, 4.0 * u(case, 106) + 0.5, true);
             let (simd, lanes_loop) = (node.hit(&w), node.hit_lanes(&w));
             assert_eq!(
                 simd.1, lanes_loop.1,

@@ -528,6 +528,36 @@ mod tests {
         }
     }
 
+    /// Every pixel gets its own numbers: over 16,384 pixels (a 128 × 128 image), no two
+    /// share the first 2D point of their first sample. A pixel hash that lost bits (an
+    /// OR or AND where the seed is mixed in, say) would give pixels that differ only in
+    /// those bits the same samples, and so the same noise.
+    #[test]
+    fn every_pixel_gets_its_own_numbers() {
+        for kind in [
+            SamplerKind::Independent,
+            SamplerKind::Stratified,
+            SamplerKind::Sobol,
+        ] {
+            let mut firsts: Vec<(u64, u64, u64)> = (0..16_384u64)
+                .map(|pixel| {
+                    let (a, b) = PixelSampler::new(kind, pixel, 0, 16).next_2d();
+                    (a.to_bits(), b.to_bits(), pixel)
+                })
+                .collect();
+            firsts.sort_unstable();
+            for w in firsts.windows(2) {
+                assert!(
+                    (w[0].0, w[0].1) != (w[1].0, w[1].1),
+                    "{kind:?}: pixels {} and {} got the same first point (the pixel hash \
+                     loses bits; renderer/src/sampler.rs mix_first, PixelSampler::key)",
+                    w[0].2,
+                    w[1].2
+                );
+            }
+        }
+    }
+
     /// The independent sampler's numbers are [`uniform`]'s for (pixel, sample,
     /// dimension), though it hashes the pixel and the sample once, not per number.
     #[test]

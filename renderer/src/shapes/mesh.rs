@@ -263,6 +263,17 @@ impl Mesh {
         self.bvh.node_bytes() + std::mem::size_of_val(self.packs.as_slice()) > INTERLEAVE_ABOVE
     }
 
+    /// The packs of a leaf (slots `first..first + count`, starting a pack): each pack's
+    /// index, the pack, and how many of its lanes the leaf fills.
+    #[inline(always)]
+    fn leaf_packs(&self, first: u32, count: u8) -> impl Iterator<Item = (usize, &TriPack, usize)> {
+        let (first, count) = (first as usize / 4, count as usize);
+        self.packs[first..first + count.div_ceil(4)]
+            .iter()
+            .enumerate()
+            .map(move |(k, pack)| (first + k, pack, (count - 4 * k).min(4)))
+    }
+
     /// Tests a leaf (slots `first..first + count`, starting a pack) pack by pack, keeping
     /// a closer hit in `best` as (triangle, t).
     #[inline(always)]
@@ -275,16 +286,11 @@ impl Mesh {
         mut t_max: Real,
         best: &mut Option<Candidate>,
     ) -> Visit {
-        let (first, count) = (first as usize / 4, count as usize);
         let mut hit = false;
-        for (k, pack) in self.packs[first..first + count.div_ceil(4)]
-            .iter()
-            .enumerate()
-        {
-            let lanes = (count - 4 * k).min(4);
+        for (index, pack, lanes) in self.leaf_packs(first, count) {
             if let Some((lane, t, b)) = wr.hit4(pack, lanes, t_min, t_max) {
                 *best = Some(Candidate {
-                    pack: (first + k) as u32,
+                    pack: index as u32,
                     lane: lane as u8,
                     t,
                     b,
@@ -331,12 +337,8 @@ impl Mesh {
             t_max,
             true,
             |first, count, tmax| {
-                let (first, count) = (first as usize / 4, count as usize);
-                for (k, pack) in self.packs[first..first + count.div_ceil(4)]
-                    .iter()
-                    .enumerate()
-                {
-                    if let Some((_, t, _)) = wr.hit4(pack, (count - 4 * k).min(4), t_min, tmax) {
+                for (_, pack, lanes) in self.leaf_packs(first, count) {
+                    if let Some((_, t, _)) = wr.hit4(pack, lanes, t_min, tmax) {
                         return Visit::Hit(t);
                     }
                 }
