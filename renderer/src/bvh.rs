@@ -801,8 +801,7 @@ impl Walk {
 /// The binary SAH tree over `order` (primitive indices, permuted in place into leaf
 /// order); the root is node 0. A set of at most `spread` primitives (0: never) is split
 /// down to leaves of one when one node over them all, a lane each, costs less by the SAH
-/// than both a leaf and the best binary split ([`Bvh::build_spread`]); collapsing then
-/// gathers them into one node.
+/// than a leaf ([`Bvh::build_spread`]); collapsing then gathers them into one node.
 fn build_binary(
     order: &mut [u32],
     boxes: &[Aabb],
@@ -843,13 +842,16 @@ fn build_binary(
                 traversal_cost,
             );
             if !single && count <= spread {
+                // No tree over these primitives costs less by the SAH than one node with
+                // a lane each: every tree has a node, and a primitive is tested when a
+                // box that holds its own is hit. So this is against the leaf alone (on a
+                // tie, the leaf: no node to walk).
                 let area = bounds.area().max(Real::MIN_POSITIVE);
                 let lanes: Real = order[start..end]
                     .iter()
                     .map(|&i| boxes[i as usize].area() / area)
                     .sum();
-                let flat = traversal_cost + lanes;
-                single = flat < count as Real && best.is_none_or(|(_, _, cost)| flat < cost);
+                single = traversal_cost + lanes < count as Real;
             }
             best.filter(|&(_, _, cost)| single || count > MAX_LEAF || cost < count as Real)
                 .map(|(axis, split_pos, _)| {

@@ -827,3 +827,75 @@ fn spread_walls_cost_a_ray_one_test() {
     }
     assert_eq!(spread.0.node_count(), 1, "one node holds the six walls");
 }
+
+/// The sizes of the leaves a ray from `o` along `d` visits, nearest first.
+fn leaf_sizes(bvh: &renderer::bvh::Bvh<8>, o: DVec3, d: DVec3) -> Vec<u8> {
+    let mut sizes = Vec::new();
+    bvh.traverse_leaves(
+        &Ray::new(vec3(o), vec3(d)),
+        0.0,
+        INF,
+        false,
+        |_, count, _| {
+            sizes.push(count);
+            Visit::Miss
+        },
+    );
+    sizes
+}
+
+/// `Bvh::build_spread` spreads a set only when the SAH says so: one node plus each box's
+/// share of the set's box must cost less than testing them all. Four boxes that each
+/// fill 7/8 of the set's box (cost 1 + 3.5 against 4) stay one leaf, and so do two slabs
+/// that make the cost exactly 2 for 2 (a tie keeps the leaf). Three slabs crossing at a
+/// common centre (cost 2 against 3) are spread though their centroids coincide and no
+/// binned split exists: the set is cut by halves instead.
+#[test]
+fn spread_only_where_the_sah_says() {
+    let aabb = |lo: [f64; 3], hi: [f64; 3]| {
+        renderer::aabb::Aabb::from_points(vec3(DVec3::from(lo)), vec3(DVec3::from(hi)))
+    };
+    let build = |boxes: &[renderer::aabb::Aabb]| {
+        renderer::bvh::Bvh::<8>::build_spread((0..boxes.len()).collect::<Vec<_>>(), boxes, 1.0).0
+    };
+    // Area of [0, a] x [0, 1] x [0, 1] over the unit cube's: (2a + 1) / 3 = 7/8.
+    let a = 0.8125;
+    let fill = build(&[
+        aabb([0.0; 3], [a, 1.0, 1.0]),
+        aabb([0.0; 3], [a, 1.0, 1.0]),
+        aabb([1.0 - a, 0.0, 0.0], [1.0; 3]),
+        aabb([1.0 - a, 0.0, 0.0], [1.0; 3]),
+    ]);
+    let s = leaf_sizes(&fill, DVec3::new(0.5, 0.5, -1.0), DVec3::Z);
+    assert_eq!(
+        s,
+        vec![4],
+        "four boxes of 7/8 of the set's box: one leaf of four expected, got leaves {s:?} \
+         (the SAH price of a spread node in renderer/src/bvh.rs build_binary)"
+    );
+    // Slabs z in [0, 1/4] and [3/4, 1] of the unit cube: each 3/6 of its area.
+    let tie = build(&[
+        aabb([0.0; 3], [1.0, 1.0, 0.25]),
+        aabb([0.0, 0.0, 0.75], [1.0; 3]),
+    ]);
+    let s = leaf_sizes(&tie, DVec3::new(0.5, 0.5, -1.0), DVec3::Z);
+    assert_eq!(
+        s,
+        vec![2],
+        "two slabs whose spread node costs exactly the leaf's 2: the leaf expected, got \
+         leaves {s:?} (renderer/src/bvh.rs build_binary: a tie keeps the leaf)"
+    );
+    let cross = build(&[
+        aabb([0.0, -1.0, -1.0], [0.0, 1.0, 1.0]),
+        aabb([-1.0, 0.0, -1.0], [1.0, 0.0, 1.0]),
+        aabb([-1.0, -1.0, 0.0], [1.0, 1.0, 0.0]),
+    ]);
+    let s = leaf_sizes(&cross, DVec3::new(-2.0, 0.5, 0.5), DVec3::X);
+    assert_eq!(
+        s,
+        vec![1],
+        "three crossing slabs with one centroid, a ray through one of them: one leaf of \
+         one expected, got leaves {s:?} (renderer/src/bvh.rs build_binary: a spread set \
+         with no binned split is cut by halves)"
+    );
+}
