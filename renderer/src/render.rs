@@ -147,9 +147,8 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
                     let (dx, dy) = if classic && spp == 1 {
                         (0.5, 0.5)
                     } else {
-                        let smp = PixelSampler::new(kind, (j * w + i) as u64, s, spp);
+                        let mut smp = PixelSampler::new(kind, (j * w + i) as u64, s, spp);
                         if classic {
-                            let mut smp = smp;
                             smp.next_2d()
                         } else {
                             // The physical model draws the rest of the sample from it. (Made
