@@ -801,7 +801,8 @@ impl Walk {
 /// The binary SAH tree over `order` (primitive indices, permuted in place into leaf
 /// order); the root is node 0. A set of at most `spread` primitives (0: never) is split
 /// down to leaves of one when one node over them all, a lane each, costs less by the SAH
-/// than a leaf ([`Bvh::build_spread`]); collapsing then gathers them into one node.
+/// than a leaf ([`Bvh::build_spread`]); collapsing gathers them into one node when the
+/// set is where a collapse starts, and may share them out with their neighbours below.
 fn build_binary(
     order: &mut [u32],
     boxes: &[Aabb],
