@@ -241,7 +241,7 @@ impl<const W: usize> Bvh<W> {
     /// `traversal_cost` is the cost of one binary node visit in units of one primitive
     /// test, for the SAH.
     pub fn build<T>(items: Vec<T>, boxes: &[Aabb], traversal_cost: Real) -> (Bvh<W>, Vec<T>) {
-        Bvh::build_with(items, boxes, traversal_cost, false)
+        Bvh::build_with::<T, 1>(items, boxes, traversal_cost, false)
     }
 
     /// [`Bvh::build`] that may also spread a set of at most `W` primitives over one node,
@@ -251,16 +251,16 @@ impl<const W: usize> Bvh<W> {
     /// of a room are (any two of them span the whole room, so every binary split looks as
     /// dear as the leaf). For instances, whose tests (a ray transform and a shape) cost far
     /// more than a lane of a node's test; a mesh's packs of four triangles are tested
-    /// together and keep [`Bvh::build`].
+    /// together and use [`Bvh::build_aligned`].
     pub fn build_spread<T>(
         items: Vec<T>,
         boxes: &[Aabb],
         traversal_cost: Real,
     ) -> (Bvh<W>, Vec<T>) {
-        Bvh::build_with(items, boxes, traversal_cost, true)
+        Bvh::build_with::<T, 1>(items, boxes, traversal_cost, true)
     }
 
-    fn build_with<T>(
+    fn build_with<T, const B: usize>(
         items: Vec<T>,
         boxes: &[Aabb],
         traversal_cost: Real,
@@ -277,7 +277,7 @@ impl<const W: usize> Bvh<W> {
         let bvh = if boxes.is_empty() {
             Bvh::default()
         } else {
-            let binary = build_binary(
+            let binary = build_binary::<B>(
                 &mut order,
                 boxes,
                 traversal_cost,
@@ -305,14 +305,28 @@ impl<const W: usize> Bvh<W> {
     /// [`Bvh::build`] with every leaf starting at a slot that is a multiple of `align`:
     /// the leaf-ordered items come back with `None` in the padding slots, and a leaf still
     /// counts only its items. An owner that packs `align` primitives per SIMD record can
-    /// then test a leaf as whole records.
+    /// then test a leaf as whole records. `align` is 1, 2, 4 or 8.
+    ///
+    /// The SAH prices what such an owner pays: a leaf costs its number of records
+    /// (`count.div_ceil(align)`, in the binned splits' sums too), and `traversal_cost` is
+    /// in units of one record's test; a leaf may hold two records. Priced by primitives
+    /// instead, the SAH split four triangles into leaves of one to three: the 1M-triangle
+    /// benchmark mesh filled its packs of four to 43 % (579,426 packs, 180,224 nodes);
+    /// priced by records, to 95 % (264,627 packs, 64,467 nodes), and one thread traced
+    /// 1.17–1.36× faster (renderer/docs/performance.md).
     pub fn build_aligned<T>(
         items: Vec<T>,
         boxes: &[Aabb],
         traversal_cost: Real,
         align: usize,
     ) -> (Bvh<W>, Vec<Option<T>>) {
-        let (mut bvh, ordered) = Bvh::build(items, boxes, traversal_cost);
+        let (mut bvh, ordered) = match align {
+            1 => Bvh::build_with::<T, 1>(items, boxes, traversal_cost, false),
+            2 => Bvh::build_with::<T, 2>(items, boxes, traversal_cost, false),
+            4 => Bvh::build_with::<T, 4>(items, boxes, traversal_cost, false),
+            8 => Bvh::build_with::<T, 8>(items, boxes, traversal_cost, false),
+            _ => panic!("records of {align} primitives: 1, 2, 4 or 8 expected"),
+        };
         // Every leaf lane, in slot order (leaves cover the slots once, side by side).
         let mut leaves: Vec<(u32, usize, usize)> = Vec::new();
         for (n, node) in bvh.nodes.iter().enumerate() {
@@ -798,12 +812,22 @@ impl Walk {
     }
 }
 
+/// Blocks of `B` primitives that `n` fill, the last partly: how the SAH counts a leaf's
+/// primitives (`B` = 1: one by one; [`Bvh::build_aligned`]: its records). A constant, so
+/// that it is a shift, or nothing, in the binned splits' inner loop.
+#[inline(always)]
+fn blocks<const B: usize>(n: usize) -> Real {
+    n.div_ceil(B) as Real
+}
+
 /// The binary SAH tree over `order` (primitive indices, permuted in place into leaf
-/// order); the root is node 0. A set of at most `spread` primitives (0: never) is split
+/// order); the root is node 0. Leaves are priced by blocks of `B` primitives ([`blocks`])
+/// and hold at most `MAX_LEAF` primitives or two blocks, whichever is more. A set of at
+/// most `spread` primitives (0: never) is split
 /// down to leaves of one when one node over them all, a lane each, costs less by the SAH
 /// than a leaf ([`Bvh::build_spread`]); collapsing gathers them into one node when the
 /// set is where a collapse starts, and may share them out with their neighbours below.
-fn build_binary(
+fn build_binary<const B: usize>(
     order: &mut [u32],
     boxes: &[Aabb],
     traversal_cost: Real,
@@ -834,7 +858,7 @@ fn build_binary(
         let split = if count <= 1 || depth >= MAX_DEPTH {
             None
         } else {
-            let best = best_split(
+            let best = best_split::<B>(
                 &order[start..end],
                 boxes,
                 &centroids,
@@ -854,7 +878,8 @@ fn build_binary(
                     .sum();
                 single = traversal_cost + lanes < count as Real;
             }
-            best.filter(|&(_, _, cost)| single || count > MAX_LEAF || cost < count as Real)
+            let (too_many, leaf_cost) = (count > MAX_LEAF.max(2 * B), blocks::<B>(count));
+            best.filter(|&(_, _, cost)| single || too_many || cost < leaf_cost)
                 .map(|(axis, split_pos, _)| {
                     // Partition in place by bin.
                     let slice = &mut order[start..end];
@@ -953,8 +978,9 @@ fn bin_of(c: Real, cb: &Aabb, axis: usize) -> usize {
 }
 
 /// The cheapest binned split: (axis, first bin of the right side, SAH cost in units of
-/// primitive tests). `None` when all centroids coincide.
-fn best_split(
+/// tests of one block of `B`, each side's count rounded up to whole blocks). `None` when
+/// all centroids coincide.
+fn best_split<const B: usize>(
     idx: &[u32],
     boxes: &[Aabb],
     centroids: &[Vec3],
@@ -995,7 +1021,8 @@ fn best_split(
                 continue;
             }
             let cost = traversal_cost
-                + (left.area() * lc as Real + right_area[k] * right_cnt[k] as Real) / parent_area;
+                + (left.area() * blocks::<B>(lc) + right_area[k] * blocks::<B>(right_cnt[k]))
+                    / parent_area;
             if best.is_none_or(|(_, _, b)| cost < b) {
                 best = Some((axis, k, cost));
             }
