@@ -313,7 +313,8 @@ impl<const W: usize> Bvh<W> {
     /// instead, the SAH split four triangles into leaves of one to three: the 1M-triangle
     /// benchmark mesh filled its packs of four to 43 % (579,426 packs, 180,224 nodes);
     /// priced by records, to 95 % (264,627 packs, 64,467 nodes), and one thread traced
-    /// 1.17–1.36× faster (renderer/docs/performance.md).
+    /// closest hits 1.17–1.36× faster (any hit: 1.33–1.36× on shadow and bounce rays, no
+    /// change on primary rays; renderer/docs/performance.md).
     pub fn build_aligned<T>(
         items: Vec<T>,
         boxes: &[Aabb],
@@ -822,7 +823,8 @@ fn blocks<const B: usize>(n: usize) -> Real {
 
 /// The binary SAH tree over `order` (primitive indices, permuted in place into leaf
 /// order); the root is node 0. Leaves are priced by blocks of `B` primitives ([`blocks`])
-/// and hold at most `MAX_LEAF` primitives or two blocks, whichever is more. A set of at
+/// and hold at most `MAX_LEAF` primitives or two blocks, whichever is more (but for sets
+/// cut by halves: coincident centroids, or the depth limit, up to `LEAF_LIMIT`). A set of at
 /// most `spread` primitives (0: never) is split
 /// down to leaves of one when one node over them all, a lane each, costs less by the SAH
 /// than a leaf ([`Bvh::build_spread`]); collapsing gathers them into one node when the

@@ -491,7 +491,7 @@ mod tests {
                             seen.iter().all(|&c| c == 1),
                             "Sobol, {spp} spp, pixel {pixel}, call positions ({x}, {y}): boxes \
                              of {nx} x {ny} hold {seen:?} points (one each expected: the \
-                             scrambling must keep the (0, m, 2)-net; renderer/src/sampler.rs owen)"
+                             scrambling must keep the (0, m, 2)-net; renderer/src/sampler.rs owen_reversed)"
                         );
                     }
                 }
@@ -505,7 +505,7 @@ mod tests {
                             offsets.len() > spp as usize / 2,
                             "Sobol, {spp} spp, pixel {pixel}, call position {k}: only \
                              {} distinct offsets inside the strata (a digital shift, not \
-                             Owen's scrambling; renderer/src/sampler.rs owen)",
+                             Owen's scrambling; renderer/src/sampler.rs owen_reversed)",
                             offsets.len()
                         );
                     }

@@ -997,22 +997,51 @@ fn aligned_leaves_hold_at_most_two_packs() {
         "a ray through one of two far-apart clusters of three met leaves of {counts:?}: \
          the SAH should split them apart (build_binary in renderer/src/bvh.rs)"
     );
-    // A grid of small cells, two triangles each: some leaves take two whole packs.
-    let n = 32;
-    let grid: Vec<_> = (0..n * n)
-        .flat_map(|k| {
-            let (x, y) = ((k % n) as f64, (k / n) as f64);
-            [0.0, 0.01].map(|z| bx(DVec3::new(x, y, 0.0), DVec3::new(x + 1.0, y + 1.0, z)))
+    // Sixteen far-apart clusters of eight overlapping triangles: split, a cluster's halves
+    // would each cover nearly all of it (a node plus two packs' tests, against two packs
+    // for the leaf), so each cluster is one leaf of two full packs.
+    let clusters: Vec<_> = (0..16)
+        .flat_map(|c| {
+            (0..8).map(move |k| {
+                let (x, e) = (10.0 * c as f64, 1e-3 * k as f64);
+                bx(
+                    DVec3::new(x + e, e, 0.0),
+                    DVec3::new(x + 1.0 + e, 1.0 + e, 0.1),
+                )
+            })
         })
         .collect();
-    let cells: Vec<_> = (0..n * n)
-        .map(|k| ((k % n) as f64 + 0.5, (k / n) as f64 + 0.5))
+    let cells: Vec<_> = (0..16).map(|c| (10.0 * c as f64 + 0.5, 0.5)).collect();
+    let counts = leaf_counts(&clusters, &cells);
+    assert!(
+        counts.iter().all(|&c| c == 8),
+        "rays through sixteen clusters of eight overlapping triangles met leaves of \
+         {counts:?} (8 each, two full packs, expected: build_binary in renderer/src/bvh.rs \
+         lets a leaf hold two packs)"
+    );
+}
+
+/// A mesh keeps its triangles in the BVH's leaf order, but gives them back in the order
+/// they came in: the exporters write that order, so an export (and the hash of it that a
+/// reference records, references/manifest.toml) does not change when the tree does.
+#[test]
+fn meshes_give_their_triangles_back_in_the_given_order() {
+    let n = 20u32;
+    let positions: Vec<Vec3> = (0..(n + 1) * (n + 1))
+        .map(|k| vec3(DVec3::new((k % (n + 1)) as f64, (k / (n + 1)) as f64, 0.0)))
         .collect();
-    let largest = leaf_counts(&grid, &cells).into_iter().max();
+    let given: Vec<[u32; 3]> = (0..n * n)
+        .flat_map(|c| {
+            let (x, y) = (c % n, c / n);
+            let v = |dx: u32, dy: u32| (y + dy) * (n + 1) + x + dx;
+            [[v(0, 0), v(1, 0), v(1, 1)], [v(0, 0), v(1, 1), v(0, 1)]]
+        })
+        .collect();
+    let mesh = Mesh::new(positions, None, None, given.clone()).unwrap();
+    assert_ne!(mesh.triangles, given, "the tree should reorder this grid");
     assert_eq!(
-        largest,
-        Some(8),
-        "the largest leaf of a grid of small triangles holds {largest:?} (8, two full \
-         packs, expected: build_binary in renderer/src/bvh.rs lets a leaf hold two packs)"
+        mesh.triangles_as_given(),
+        given,
+        "Mesh::triangles_as_given (renderer/src/shapes/mesh.rs) lost the given order"
     );
 }

@@ -464,7 +464,7 @@ pub fn write_obj(mesh: &Mesh, reverse: bool) -> String {
     for p in &mesh.positions {
         writeln!(s, "v {} {} {}", f(p.x as f64), f(p.y as f64), f(p.z as f64)).unwrap();
     }
-    for t in &mesh.triangles {
+    for t in &mesh.triangles_as_given() {
         let (a, b, c) = if reverse {
             (t[0], t[2], t[1])
         } else {

@@ -283,7 +283,7 @@ impl Exporter<'_> {
                     d.push_str(" }\n");
                 }
                 write!(d, "  face_indices {{ {}", m.triangles.len()).unwrap();
-                for t in &m.triangles {
+                for t in &m.triangles_as_given() {
                     write!(d, ", <{}, {}, {}>", t[0], t[1], t[2]).unwrap();
                 }
                 d.push_str(" }\n}\n");

@@ -19,6 +19,9 @@ pub struct Mesh {
     pub uvs: Option<Vec<Vec2>>,
     /// Triangles as vertex indices, in BVH leaf order (not file order).
     pub triangles: Vec<[u32; 3]>,
+    /// For each triangle of `triangles`, its index in the order it was given (the file's):
+    /// what [`Mesh::triangles_as_given`] undoes.
+    given: Vec<u32>,
     bvh: Bvh<8>,
     /// The triangles' vertices, four per pack, in the BVH's slot order: every leaf starts
     /// a pack, so a leaf is tested a pack (four triangles) at a time with no index array
@@ -99,17 +102,20 @@ impl Mesh {
                 b
             })
             .collect();
-        let (bvh, slots) = Bvh::<8>::build_aligned(triangles, &boxes, 1.0, 4);
+        let numbered: Vec<(u32, [u32; 3])> = (0..).zip(triangles).collect();
+        let (bvh, slots) = Bvh::<8>::build_aligned(numbered, &boxes, 1.0, 4);
         let mut triangles = Vec::with_capacity(boxes.len());
+        let mut given = Vec::with_capacity(boxes.len());
         let (mut packs, mut pack_tris) = (Vec::new(), Vec::new());
         for chunk in slots.chunks(4) {
             let mut verts = Vec::with_capacity(4);
             let mut ids = [u32::MAX; 4];
             for (lane, t) in chunk.iter().enumerate() {
-                if let Some(t) = t {
+                if let Some((g, t)) = t {
                     ids[lane] = triangles.len() as u32;
                     verts.push(t.map(|k| positions[k as usize]));
                     triangles.push(*t);
+                    given.push(*g);
                 }
             }
             packs.push(TriPack::new(&verts));
@@ -120,6 +126,7 @@ impl Mesh {
             normals,
             uvs,
             triangles,
+            given,
             bvh,
             packs,
             pack_tris,
@@ -183,6 +190,17 @@ impl Mesh {
             }
         }
         Mesh::new(pos, all_normals.then_some(nrm), all_uvs.then_some(uv), tris)
+    }
+
+    /// The triangles in the order they were given (the file's), not the BVH's: what an
+    /// exporter writes, so that an export, and the hash of it that a reference records,
+    /// does not change with the tree.
+    pub fn triangles_as_given(&self) -> Vec<[u32; 3]> {
+        let mut out = vec![[0; 3]; self.triangles.len()];
+        for (t, &g) in self.triangles.iter().zip(&self.given) {
+            out[g as usize] = *t;
+        }
+        out
     }
 
     /// Bounds in object space.
@@ -251,8 +269,9 @@ impl Mesh {
 
     /// Asks for the packs of the leaf at slots `first..` ahead of its test: one or two
     /// (the SAH makes leaves of at most two packs; the rare larger leaf, of coincident
-    /// centroids, gets its first two), three cache lines each with no loop (a pack is 144
-    /// bytes at a multiple of 16). 40 % of the benchmark mesh's leaves have two packs.
+    /// centroids or past the depth limit, gets its first two), three cache lines each
+    /// with no loop (a pack is 144 bytes at a multiple of 16). 40 % of the benchmark
+    /// mesh's leaves have two packs.
     #[inline(always)]
     fn leaf_ahead(&self, first: u32, count: u8) {
         let first = first as usize / 4;
