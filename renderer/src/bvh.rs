@@ -302,32 +302,26 @@ impl<const W: usize> Bvh<W> {
         (bvh, ordered)
     }
 
-    /// [`Bvh::build`] with every leaf starting at a slot that is a multiple of `align`:
+    /// [`Bvh::build`] with every leaf starting at a slot that is a multiple of `ALIGN`:
     /// the leaf-ordered items come back with `None` in the padding slots, and a leaf still
-    /// counts only its items. An owner that packs `align` primitives per SIMD record can
-    /// then test a leaf as whole records. `align` is 1, 2, 4 or 8.
+    /// counts only its items. An owner that packs `ALIGN` primitives per SIMD record can
+    /// then test a leaf as whole records.
     ///
     /// The SAH prices what such an owner pays: a leaf costs its number of records
-    /// (`count.div_ceil(align)`, in the binned splits' sums too), and `traversal_cost` is
+    /// (`count.div_ceil(ALIGN)`, in the binned splits' sums too), and `traversal_cost` is
     /// in units of one record's test; a leaf may hold two records. Priced by primitives
     /// instead, the SAH split four triangles into leaves of one to three: the 1M-triangle
     /// benchmark mesh filled its packs of four to 43 % (579,426 packs, 180,224 nodes);
     /// priced by records, to 95 % (264,627 packs, 64,467 nodes), and one thread traced
     /// closest hits 1.17–1.36× faster (any hit: 1.33–1.36× on shadow and bounce rays, no
     /// change on primary rays; renderer/docs/performance.md).
-    pub fn build_aligned<T>(
+    pub fn build_aligned<T, const ALIGN: usize>(
         items: Vec<T>,
         boxes: &[Aabb],
         traversal_cost: Real,
-        align: usize,
     ) -> (Bvh<W>, Vec<Option<T>>) {
-        let (mut bvh, ordered) = match align {
-            1 => Bvh::build_with::<T, 1>(items, boxes, traversal_cost, false),
-            2 => Bvh::build_with::<T, 2>(items, boxes, traversal_cost, false),
-            4 => Bvh::build_with::<T, 4>(items, boxes, traversal_cost, false),
-            8 => Bvh::build_with::<T, 8>(items, boxes, traversal_cost, false),
-            _ => panic!("records of {align} primitives: 1, 2, 4 or 8 expected"),
-        };
+        const { assert!(ALIGN > 0, "records of at least one primitive") };
+        let (mut bvh, ordered) = Bvh::build_with::<T, ALIGN>(items, boxes, traversal_cost, false);
         // Every leaf lane, in slot order (leaves cover the slots once, side by side).
         let mut leaves: Vec<(u32, usize, usize)> = Vec::new();
         for (n, node) in bvh.nodes.iter().enumerate() {
@@ -339,12 +333,12 @@ impl<const W: usize> Bvh<W> {
         }
         leaves.sort_unstable();
         let mut ordered = ordered.into_iter();
-        let mut out: Vec<Option<T>> = Vec::with_capacity(boxes.len() + align * leaves.len());
+        let mut out: Vec<Option<T>> = Vec::with_capacity(boxes.len() + ALIGN * leaves.len());
         for (_, n, lane) in leaves {
             let count = bvh.nodes[n].count[lane] as usize;
             bvh.nodes[n].child[lane] = out.len() as u32;
             out.extend(ordered.by_ref().take(count).map(Some));
-            out.resize_with(out.len().next_multiple_of(align), || None);
+            out.resize_with(out.len().next_multiple_of(ALIGN), || None);
         }
         (bvh, out)
     }

@@ -828,6 +828,11 @@ fn spread_walls_cost_a_ray_one_test() {
     assert_eq!(spread.0.node_count(), 1, "one node holds the six walls");
 }
 
+/// The box from `lo` to `hi`.
+fn aabb(lo: DVec3, hi: DVec3) -> renderer::aabb::Aabb {
+    renderer::aabb::Aabb::from_points(vec3(lo), vec3(hi))
+}
+
 /// The sizes of the leaves a ray from `o` along `d` visits, nearest first.
 fn leaf_sizes(bvh: &renderer::bvh::Bvh<8>, o: DVec3, d: DVec3) -> Vec<u8> {
     let mut sizes = Vec::new();
@@ -852,9 +857,7 @@ fn leaf_sizes(bvh: &renderer::bvh::Bvh<8>, o: DVec3, d: DVec3) -> Vec<u8> {
 /// binned split exists: the set is cut by halves instead.
 #[test]
 fn spread_only_where_the_sah_says() {
-    let aabb = |lo: [f64; 3], hi: [f64; 3]| {
-        renderer::aabb::Aabb::from_points(vec3(DVec3::from(lo)), vec3(DVec3::from(hi)))
-    };
+    let aabb = |lo: [f64; 3], hi: [f64; 3]| aabb(DVec3::from(lo), DVec3::from(hi));
     let build = |boxes: &[renderer::aabb::Aabb]| {
         renderer::bvh::Bvh::<8>::build_spread((0..boxes.len()).collect::<Vec<_>>(), boxes, 1.0).0
     };
@@ -917,40 +920,41 @@ fn aligned_leaves_fill_their_packs() {
                 (DVec3::new(x, y, 0.0), DVec3::new(x + 1.0, y + 1.0, 0.01)),
             ]
         })
-        .map(|(lo, hi)| renderer::aabb::Aabb::from_points(vec3(lo), vec3(hi)))
+        .map(|(lo, hi)| aabb(lo, hi))
         .collect();
-    // Packs of four as a mesh uses; the other sizes the build takes, likewise.
-    for align in [4, 1, 2, 8] {
-        let (_, slots) =
-            renderer::bvh::Bvh::<8>::build_aligned((0..boxes.len()).collect(), &boxes, 1.0, align);
-        let used = slots.iter().filter(|s| s.is_some()).count();
-        assert_eq!(used, boxes.len(), "every triangle has one slot");
-        let fill = used as f64 / slots.len() as f64;
-        assert!(
-            fill > 0.9,
-            "{used} triangles took {} slots in packs of {align} ({:.0} % full, over 90 % \
-             expected): the SAH of Bvh::build_aligned (renderer/src/bvh.rs, build_binary and \
-             best_split) should price a leaf by its packs",
-            slots.len(),
-            100.0 * fill
-        );
-    }
+    // Packs of four as a mesh uses; other sizes likewise.
+    fill_packs::<4>(&boxes);
+    fill_packs::<1>(&boxes);
+    fill_packs::<2>(&boxes);
+    fill_packs::<8>(&boxes);
+}
+
+/// Builds `boxes` in packs of `ALIGN` and checks that the packs are over 90 % full.
+fn fill_packs<const ALIGN: usize>(boxes: &[renderer::aabb::Aabb]) {
+    let (_, slots) =
+        renderer::bvh::Bvh::<8>::build_aligned::<_, ALIGN>((0..boxes.len()).collect(), boxes, 1.0);
+    let used = slots.iter().filter(|s| s.is_some()).count();
+    assert_eq!(used, boxes.len(), "every triangle has one slot");
+    let fill = used as f64 / slots.len() as f64;
+    assert!(
+        fill > 0.9,
+        "{used} triangles took {} slots in packs of {ALIGN} ({:.0} % full, over 90 % \
+         expected): the SAH of Bvh::build_aligned (renderer/src/bvh.rs, build_binary and \
+         best_split) should price a leaf by its packs",
+        slots.len(),
+        100.0 * fill
+    );
 }
 
 /// The triangle counts of the leaves that rays along −z meet, one ray through the middle
 /// of each of `cells` (x, y) points, on a tree of `build_aligned` with packs of four.
 fn leaf_counts(boxes: &[renderer::aabb::Aabb], cells: &[(f64, f64)]) -> Vec<u8> {
     let (bvh, _) =
-        renderer::bvh::Bvh::<8>::build_aligned((0..boxes.len()).collect(), boxes, 1.0, 4);
-    let mut counts = Vec::new();
-    for &(x, y) in cells {
-        let ray = Ray::new(vec3(DVec3::new(x, y, 10.0)), Vec3::NEG_Z);
-        bvh.traverse_leaves(&ray, 0.0, INF, false, |_, count, _| {
-            counts.push(count);
-            Visit::Miss
-        });
-    }
-    counts
+        renderer::bvh::Bvh::<8>::build_aligned::<_, 4>((0..boxes.len()).collect(), boxes, 1.0);
+    cells
+        .iter()
+        .flat_map(|&(x, y)| leaf_sizes(&bvh, DVec3::new(x, y, 10.0), DVec3::NEG_Z))
+        .collect()
 }
 
 /// `build_aligned` keeps a leaf to two packs, splits a set the SAH finds cheaper split
@@ -958,21 +962,21 @@ fn leaf_counts(boxes: &[renderer::aabb::Aabb], cells: &[(f64, f64)]) -> Vec<u8> 
 /// (The fill test above cannot tell these apart: they change the tree, not the padding.)
 #[test]
 fn aligned_leaves_hold_at_most_two_packs() {
-    let bx = |lo: DVec3, hi: DVec3| renderer::aabb::Aabb::from_points(vec3(lo), vec3(hi));
     // Twelve long boxes over the same square, each nudged: any split leaves both sides
     // nearly the whole square, so the SAH prices every split above one leaf of three
     // packs. A leaf holds two at most, so the set must be split anyway.
     let long: Vec<_> = (0..12)
         .map(|k| {
             let e = 1e-3 * k as f64;
-            bx(DVec3::new(e, e, 0.0), DVec3::new(1.0 + e, 1.0 + e, 0.1))
+            aabb(DVec3::new(e, e, 0.0), DVec3::new(1.0 + e, 1.0 + e, 0.1))
         })
         .collect();
     let counts = leaf_counts(&long, &[(0.5, 0.5)]);
     assert_eq!(
         counts.iter().map(|&c| c as usize).sum::<usize>(),
         12,
-        "{counts:?}"
+        "a ray through twelve overlapping triangles met leaves of {counts:?}: it should \
+         meet each triangle once (Bvh::traverse_leaves in renderer/src/bvh.rs)"
     );
     assert!(
         counts.iter().all(|&c| c <= 8),
@@ -986,7 +990,7 @@ fn aligned_leaves_hold_at_most_two_packs() {
         .flat_map(|&x0| {
             (0..3).map(move |k| {
                 let x = x0 + 0.1 * k as f64;
-                bx(DVec3::new(x, 0.0, 0.0), DVec3::new(x + 0.1, 0.1, 0.0))
+                aabb(DVec3::new(x, 0.0, 0.0), DVec3::new(x + 0.1, 0.1, 0.0))
             })
         })
         .collect();
@@ -1004,7 +1008,7 @@ fn aligned_leaves_hold_at_most_two_packs() {
         .flat_map(|c| {
             (0..8).map(move |k| {
                 let (x, e) = (10.0 * c as f64, 1e-3 * k as f64);
-                bx(
+                aabb(
                     DVec3::new(x + e, e, 0.0),
                     DVec3::new(x + 1.0 + e, 1.0 + e, 0.1),
                 )

@@ -103,7 +103,7 @@ impl Mesh {
             })
             .collect();
         let numbered: Vec<(u32, [u32; 3])> = (0..).zip(triangles).collect();
-        let (bvh, slots) = Bvh::<8>::build_aligned(numbered, &boxes, 1.0, 4);
+        let (bvh, slots) = Bvh::<8>::build_aligned::<_, 4>(numbered, &boxes, 1.0);
         let mut triangles = Vec::with_capacity(boxes.len());
         let mut given = Vec::with_capacity(boxes.len());
         let (mut packs, mut pack_tris) = (Vec::new(), Vec::new());
