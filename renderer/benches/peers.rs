@@ -299,6 +299,9 @@ fn mesh(dir: &Path, quick: bool) {
 /// which then counts the traversal alone. `passes` > 1 repeats it, for a sampling profiler
 /// (`perf record -e cpu-clock`), whose samples would otherwise fall mostly in the build.
 fn profile(set: &str, passes: usize) {
+    if let Some(n) = set.strip_prefix("growth-") {
+        return profile_growth(n, passes);
+    }
     let (pos, tris) = big_mesh();
     let agg = Aggregate::new(vec![Instance {
         shape: Shape::Mesh(Arc::new(Mesh::new(pos, None, None, tris).unwrap())),
@@ -316,6 +319,38 @@ fn profile(set: &str, passes: usize) {
         hits = trace_set(&agg, &s.rays);
     }
     println!("{set}: {} rays, {hits} hits", s.rays.len());
+}
+
+/// `peers profile growth-N PASSES`: passes of the cost-growth scene of N triangles (100,
+/// 10000 or 1000000: the UV spheres `growth` times), 128² primary rays through
+/// `intersect_many` as there.
+fn profile_growth(n: &str, passes: usize) {
+    let Some(&(nu, nv)) = [
+        ("100", (10, 5)),
+        ("10000", (100, 50)),
+        ("1000000", (1000, 500)),
+    ]
+    .iter()
+    .find(|(k, _)| *k == n)
+    .map(|(_, s)| s) else {
+        eprintln!("no growth scene of {n} triangles (100, 10000, 1000000)");
+        std::process::exit(2);
+    };
+    let agg = Aggregate::new(vec![Instance {
+        shape: Shape::Mesh(Arc::new(common::mesh(nu, nv))),
+        xf: None,
+        material: 0,
+        object_id: 1,
+    }]);
+    let cam = common::camera();
+    let mut hits = 0;
+    for _ in 0..passes.max(1) {
+        hits = common::trace_all(&cam, &agg);
+    }
+    println!(
+        "growth-{n}: {} rays, {hits} hits",
+        common::RES * common::RES
+    );
 }
 
 #[inline(never)]
@@ -430,7 +465,7 @@ fn main() {
             },
         ),
         _ => {
-            eprintln!("usage: peers mesh DIR [--quick] | peers growth [--quick] | peers profile SET [PASSES] (see scripts/bench-peers.sh)");
+            eprintln!("usage: peers mesh DIR [--quick] | peers growth [--quick] | peers profile SET|growth-N [PASSES] (see scripts/bench-peers.sh)");
             std::process::exit(2);
         }
     }

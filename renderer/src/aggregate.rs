@@ -352,7 +352,8 @@ impl Aggregate {
             .partition(|(_, inst)| inst.bounds().is_finite());
         let boxes: Vec<Aabb> = bounded.iter().map(|(_, i)| i.bounds()).collect();
         let (bvh, mut tagged) = Bvh::<8>::build_spread(bounded, &boxes, TRAVERSAL_COST);
-        let leads = tagged.iter().map(|(_, i)| Lead::of(i)).collect();
+        let mut leads = crate::pages::huge_with_capacity(tagged.len());
+        leads.extend(tagged.iter().map(|(_, i)| Lead::of(i)));
         tagged.extend(unbounded);
         let mut scene_order = vec![0u32; tagged.len()];
         for (k, (original, _)) in tagged.iter().enumerate() {

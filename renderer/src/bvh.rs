@@ -285,7 +285,7 @@ impl<const W: usize> Bvh<W> {
             );
             let (nodes, depth) = collapse::<W>(&binary);
             Bvh {
-                nodes,
+                nodes: crate::pages::on_huge_pages(nodes),
                 bounds: binary[0].bounds,
                 stack_need: (W - 1) * (depth + 1),
             }
@@ -551,17 +551,20 @@ impl<const W: usize> Bvh<W> {
         });
         let mut stacks: [ArrayVec<Entry, STACK>; BATCH] = std::array::from_fn(|_| ArrayVec::new());
         let mut active: u64 = (1u64 << rays.len()) - 1;
+        // Each round steps the active rays in order, taken from the mask's bits (a test
+        // per slot mispredicts once rays finish at different steps).
         while active != 0 {
-            for (r, (w, stack)) in walks.iter_mut().zip(stacks.iter_mut()).enumerate() {
-                if active & (1u64 << r) != 0
-                    && !w.step::<_, _, _, false>(
-                        stack,
-                        &self.nodes,
-                        false,
-                        &mut |first, count, t| visit(r, first, count, t),
-                        ahead,
-                    )
-                {
+            let mut round = active;
+            while round != 0 {
+                let r = round.trailing_zeros() as usize;
+                round &= round - 1;
+                if !walks[r].step::<_, _, _, false>(
+                    &mut stacks[r],
+                    &self.nodes,
+                    false,
+                    &mut |first, count, t| visit(r, first, count, t),
+                    ahead,
+                ) {
                     active &= !(1u64 << r);
                 }
             }

@@ -10,6 +10,7 @@ pub mod hit;
 pub mod light;
 pub mod material;
 pub mod output;
+pub mod pages;
 pub mod physical;
 pub mod ray;
 pub mod real;

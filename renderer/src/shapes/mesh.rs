@@ -106,7 +106,8 @@ impl Mesh {
         let (bvh, slots) = Bvh::<8>::build_aligned::<_, 4>(numbered, &boxes, 1.0);
         let mut triangles = Vec::with_capacity(boxes.len());
         let mut given = Vec::with_capacity(boxes.len());
-        let (mut packs, mut pack_tris) = (Vec::new(), Vec::new());
+        let mut packs = crate::pages::huge_with_capacity(slots.len() / 4);
+        let mut pack_tris = Vec::with_capacity(slots.len() / 4);
         for chunk in slots.chunks(4) {
             let mut verts = Vec::with_capacity(4);
             let mut ids = [u32::MAX; 4];

@@ -1,0 +1,146 @@
+//! Large read-mostly arrays (BVH nodes, triangle packs, instance leads) on 2 MiB pages.
+//!
+//! A ray through a large tree touches nodes and records scattered over tens of megabytes.
+//! On 4 KiB pages most of those touches also miss the TLB (a few thousand entries, a few
+//! megabytes), and a page walk is a second dependent memory access; a prefetch does not
+//! hide it well. The kernel backs memory with transparent huge pages (2 MiB) where a
+//! program asks for them with `madvise(MADV_HUGEPAGE)`: the default policy
+//! (`/sys/kernel/mm/transparent_hugepage/enabled` set to `madvise`, as on the development
+//! machine) grants them to no one else. Embree asks the same for its large allocations.
+//! Measured in renderer/docs/performance.md ("Huge pages").
+//!
+//! The advice is a hint: it changes no value, only how the memory is mapped, and where
+//! the system refuses it (another policy, another OS) nothing else changes.
+
+/// The size of a huge page on x86-64 and of the advice's alignment.
+pub const HUGE_PAGE: usize = 2 << 20;
+
+/// Arrays of at least this many bytes are put on huge pages: any range this long holds
+/// a whole aligned huge page, whatever its start (the allocator's blocks are not aligned
+/// to 2 MiB, and only whole aligned pages inside the block can be huge).
+pub const HUGE_ABOVE: usize = 2 * HUGE_PAGE;
+
+/// `v`'s items in memory advised for huge pages when they take at least [`HUGE_ABOVE`]
+/// bytes; otherwise `v` itself. The copy is made into memory not yet touched, so the
+/// kernel maps it huge from the first write.
+pub fn on_huge_pages<T: Copy>(v: Vec<T>) -> Vec<T> {
+    if std::mem::size_of_val(v.as_slice()) < HUGE_ABOVE {
+        return v;
+    }
+    let mut out = Vec::with_capacity(v.len());
+    advise(out.as_mut_ptr(), v.len());
+    out.extend_from_slice(&v);
+    out
+}
+
+/// An empty vector with room for `n` items, whose memory the kernel is asked to map on
+/// huge pages when it takes at least [`HUGE_ABOVE`] bytes. Fill it without growing it
+/// past `n` (a reallocation would lose the advice).
+pub fn huge_with_capacity<T>(n: usize) -> Vec<T> {
+    let mut v = Vec::with_capacity(n);
+    if n.saturating_mul(std::mem::size_of::<T>()) >= HUGE_ABOVE {
+        advise(v.as_mut_ptr(), n);
+    }
+    v
+}
+
+/// Advises the whole huge pages inside the `n` items at `p` (allocated, not yet touched).
+#[cfg(target_os = "linux")]
+fn advise<T>(p: *mut T, n: usize) {
+    let (start, end) = (p as usize, p as usize + n * std::mem::size_of::<T>());
+    let (first, last) = (
+        start.next_multiple_of(HUGE_PAGE),
+        end / HUGE_PAGE * HUGE_PAGE,
+    );
+    if first < last {
+        // SAFETY: `[first, last)` lies inside the allocation of `n` items at `p`, which
+        // this process owns; MADV_HUGEPAGE changes only how those pages are mapped, never
+        // their contents, and a refusal (an error return) is harmless and ignored.
+        unsafe {
+            libc::madvise(
+                first as *mut libc::c_void,
+                last - first,
+                libc::MADV_HUGEPAGE,
+            );
+        }
+    }
+}
+
+/// Elsewhere there is no such advice; the memory stays as the allocator gave it.
+#[cfg(not(target_os = "linux"))]
+fn advise<T>(_p: *mut T, _n: usize) {}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The `VmFlags` of the mapping of this process that holds `addr` (Linux's
+    /// /proc/self/smaps: `hg` marks memory advised with MADV_HUGEPAGE).
+    #[cfg(target_os = "linux")]
+    fn vm_flags(addr: usize) -> String {
+        let smaps = std::fs::read_to_string("/proc/self/smaps").expect("/proc/self/smaps");
+        let mut inside = false;
+        for line in smaps.lines() {
+            if let Some((range, _)) = line.split_once(' ') {
+                if let Some((a, b)) = range.split_once('-') {
+                    if let (Ok(a), Ok(b)) =
+                        (usize::from_str_radix(a, 16), usize::from_str_radix(b, 16))
+                    {
+                        inside = (a..b).contains(&addr);
+                        continue;
+                    }
+                }
+            }
+            if inside {
+                if let Some(flags) = line.strip_prefix("VmFlags:") {
+                    return flags.trim().to_string();
+                }
+            }
+        }
+        panic!("no mapping holds {addr:#x} in /proc/self/smaps")
+    }
+
+    /// The first huge-page boundary in the memory at `p` (inside it for an array of at
+    /// least [`HUGE_ABOVE`] bytes).
+    fn aligned_inside<T>(p: *const T) -> usize {
+        (p as usize).next_multiple_of(HUGE_PAGE)
+    }
+
+    #[test]
+    fn large_arrays_keep_their_items_and_are_advised() {
+        let n = HUGE_ABOVE / 8 + 1000;
+        let v: Vec<u64> = (0..n as u64).map(|k| k * 7 + 1).collect();
+        let moved = on_huge_pages(v.clone());
+        assert_eq!(moved, v, "on_huge_pages must copy every item in order");
+        // A kernel built without transparent huge pages refuses the advice (and has no
+        // such directory): then there is nothing to see.
+        #[cfg(target_os = "linux")]
+        if std::path::Path::new("/sys/kernel/mm/transparent_hugepage").exists() {
+            let flags = vm_flags(aligned_inside(moved.as_ptr()));
+            assert!(
+                flags.split(' ').any(|f| f == "hg"),
+                "an array of {} bytes was not advised for huge pages (pages::advise); its \
+                 mapping's VmFlags are {flags:?}",
+                n * 8
+            );
+            let empty: Vec<u64> = huge_with_capacity(n);
+            let flags = vm_flags(aligned_inside(empty.as_ptr()));
+            assert!(
+                flags.split(' ').any(|f| f == "hg"),
+                "huge_with_capacity({n}) of u64 was not advised (pages::advise): {flags:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn small_arrays_stay_where_they_are() {
+        let v: Vec<u64> = (0..(HUGE_ABOVE / 8 - 1) as u64).collect();
+        let p = v.as_ptr();
+        let kept = on_huge_pages(v);
+        assert_eq!(
+            kept.as_ptr(),
+            p,
+            "an array under HUGE_ABOVE bytes was copied (pages::on_huge_pages)"
+        );
+    }
+}
