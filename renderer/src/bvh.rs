@@ -737,14 +737,17 @@ impl Walk {
                 // node is a descent. (Large primitives, such as a ground quad, sit in
                 // leaves near the root; a shadow ray that crosses one needs nothing else.)
                 // The stack keeps each lane's entry distance either way.
-                let mut key = near;
-                if any {
-                    for (k, c) in key.iter_mut().zip(n.count) {
+                let mut leaves_first = near;
+                let key = if any {
+                    for (k, c) in leaves_first.iter_mut().zip(n.count) {
                         if c > 0 {
                             *k = Real::NEG_INFINITY;
                         }
                     }
-                }
+                    &leaves_first
+                } else {
+                    &near
+                };
                 let first = mask.trailing_zeros() as usize;
                 let rest = mask & (mask - 1);
                 let next = if rest == 0 {
