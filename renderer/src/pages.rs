@@ -142,5 +142,31 @@ mod tests {
             p,
             "an array under HUGE_ABOVE bytes was copied (pages::on_huge_pages)"
         );
+        // From HUGE_ABOVE bytes on, an array moves (into advised memory).
+        let v: Vec<u64> = (0..(HUGE_ABOVE / 8) as u64).collect();
+        let p = v.as_ptr();
+        let moved = on_huge_pages(v);
+        assert_ne!(
+            moved.as_ptr(),
+            p,
+            "an array of HUGE_ABOVE bytes was left where it was (pages::on_huge_pages)"
+        );
+    }
+
+    /// `huge_with_capacity` advises from [`HUGE_ABOVE`] bytes on. (Not checked below it:
+    /// memory there may be advised already, as a range that an earlier array of this
+    /// process advised and gave back.)
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn room_for_large_arrays_is_advised() {
+        if !std::path::Path::new("/sys/kernel/mm/transparent_hugepage").exists() {
+            return;
+        }
+        let v: Vec<u8> = huge_with_capacity(HUGE_ABOVE);
+        let flags = vm_flags(aligned_inside(v.as_ptr()));
+        assert!(
+            flags.split(' ').any(|f| f == "hg"),
+            "huge_with_capacity of HUGE_ABOVE bytes was not advised (pages::advise): {flags:?}"
+        );
     }
 }
