@@ -100,10 +100,20 @@ mod tests {
         panic!("no mapping holds {addr:#x} in /proc/self/smaps")
     }
 
-    /// The first huge-page boundary in the memory at `p` (inside it for an array of at
-    /// least [`HUGE_ABOVE`] bytes).
-    fn aligned_inside<T>(p: *const T) -> usize {
-        (p as usize).next_multiple_of(HUGE_PAGE)
+    /// The `VmFlags` of the first or the last of the whole huge pages inside the `bytes`
+    /// at `p` that lacks `hg` (the advice), if one does.
+    #[cfg(target_os = "linux")]
+    fn unadvised<T>(p: *const T, bytes: usize) -> Option<String> {
+        let first = (p as usize).next_multiple_of(HUGE_PAGE);
+        let last = (p as usize + bytes) / HUGE_PAGE * HUGE_PAGE;
+        assert!(
+            first < last,
+            "no whole huge page inside {bytes} bytes at {p:?}"
+        );
+        [first, last - 1]
+            .into_iter()
+            .map(vm_flags)
+            .find(|f| !f.split(' ').any(|x| x == "hg"))
     }
 
     #[test]
@@ -116,19 +126,17 @@ mod tests {
         // such directory): then there is nothing to see.
         #[cfg(target_os = "linux")]
         if std::path::Path::new("/sys/kernel/mm/transparent_hugepage").exists() {
-            let flags = vm_flags(aligned_inside(moved.as_ptr()));
-            assert!(
-                flags.split(' ').any(|f| f == "hg"),
-                "an array of {} bytes was not advised for huge pages (pages::advise); its \
-                 mapping's VmFlags are {flags:?}",
-                n * 8
-            );
+            if let Some(flags) = unadvised(moved.as_ptr(), n * 8) {
+                panic!(
+                    "an array of {} bytes was not advised for huge pages, from its first \
+                     whole huge page to its last (pages::advise); VmFlags {flags:?}",
+                    n * 8
+                );
+            }
             let empty: Vec<u64> = huge_with_capacity(n);
-            let flags = vm_flags(aligned_inside(empty.as_ptr()));
-            assert!(
-                flags.split(' ').any(|f| f == "hg"),
-                "huge_with_capacity({n}) of u64 was not advised (pages::advise): {flags:?}"
-            );
+            if let Some(flags) = unadvised(empty.as_ptr(), n * 8) {
+                panic!("huge_with_capacity({n}) of u64 was not advised (pages::advise): {flags:?}");
+            }
         }
     }
 
@@ -163,10 +171,10 @@ mod tests {
             return;
         }
         let v: Vec<u8> = huge_with_capacity(HUGE_ABOVE);
-        let flags = vm_flags(aligned_inside(v.as_ptr()));
-        assert!(
-            flags.split(' ').any(|f| f == "hg"),
-            "huge_with_capacity of HUGE_ABOVE bytes was not advised (pages::advise): {flags:?}"
-        );
+        if let Some(flags) = unadvised(v.as_ptr(), HUGE_ABOVE) {
+            panic!(
+                "huge_with_capacity of HUGE_ABOVE bytes was not advised (pages::advise): {flags:?}"
+            );
+        }
     }
 }
