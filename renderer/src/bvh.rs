@@ -737,8 +737,9 @@ impl Walk {
                 // node is a descent. (Large primitives, such as a ground quad, sit in
                 // leaves near the root; a shadow ray that crosses one needs nothing else.)
                 // The stack keeps each lane's entry distance either way.
-                let mut leaves_first = near;
+                let mut leaves_first;
                 let key = if any {
+                    leaves_first = near;
                     for (k, c) in leaves_first.iter_mut().zip(n.count) {
                         if c > 0 {
                             *k = Real::NEG_INFINITY;

@@ -3,14 +3,20 @@
 //! A ray through a large tree touches nodes and records scattered over tens of megabytes.
 //! On 4 KiB pages most of those touches also miss the TLB (a few thousand entries, a few
 //! megabytes), and a page walk is a second dependent memory access; a prefetch does not
-//! hide it well. The kernel backs memory with transparent huge pages (2 MiB) where a
-//! program asks for them with `madvise(MADV_HUGEPAGE)`: the default policy
-//! (`/sys/kernel/mm/transparent_hugepage/enabled` set to `madvise`, as on the development
-//! machine) grants them to no one else. Embree asks the same for its large allocations.
-//! Measured in renderer/docs/performance.md ("Huge pages").
+//! hide it well. Linux backs memory with transparent huge pages (2 MiB) where a program
+//! asks for them with `madvise(MADV_HUGEPAGE)`; with the policy of the development machine
+//! (`/sys/kernel/mm/transparent_hugepage/enabled` set to `madvise`; other systems ship
+//! `always`, which needs no asking) it grants them to no one else. Embree asks the same
+//! for its large allocations. Measured in renderer/docs/performance.md ("Huge pages").
 //!
 //! The advice is a hint: it changes no value, only how the memory is mapped, and where
-//! the system refuses it (another policy, another OS) nothing else changes.
+//! the system refuses it (another policy, another OS) nothing else changes. It is given
+//! to a fresh allocation before the array is written, and pages the kernel maps from then
+//! on are huge; but the allocator may hand out memory that freed arrays already touched
+//! (glibc serves large blocks from its heap once large blocks have been freed), and those
+//! pages stay small (on the 10⁶-triangle growth scene, 10 of the 16 MB of nodes became
+//! huge). The advice also stays on such a heap range after the array is freed, so a later
+//! allocation there may get huge pages too. A clone of an array is a plain allocation.
 
 /// The size of a huge page on x86-64 and of the advice's alignment.
 pub const HUGE_PAGE: usize = 2 << 20;
@@ -20,11 +26,11 @@ pub const HUGE_PAGE: usize = 2 << 20;
 /// to 2 MiB, and only whole aligned pages inside the block can be huge).
 pub const HUGE_ABOVE: usize = 2 * HUGE_PAGE;
 
-/// `v`'s items in memory advised for huge pages when they take at least [`HUGE_ABOVE`]
-/// bytes; otherwise `v` itself. The copy is made into memory not yet touched, so the
-/// kernel maps it huge from the first write.
+/// `v`'s items in a new allocation advised for huge pages when they take at least
+/// [`HUGE_ABOVE`] bytes (on Linux); otherwise `v` itself. The copy briefly doubles the
+/// array's memory.
 pub fn on_huge_pages<T: Copy>(v: Vec<T>) -> Vec<T> {
-    if std::mem::size_of_val(v.as_slice()) < HUGE_ABOVE {
+    if !cfg!(target_os = "linux") || std::mem::size_of_val(v.as_slice()) < HUGE_ABOVE {
         return v;
     }
     let mut out = Vec::with_capacity(v.len());
@@ -44,24 +50,25 @@ pub fn huge_with_capacity<T>(n: usize) -> Vec<T> {
     v
 }
 
-/// Advises the whole huge pages inside the `n` items at `p` (allocated, not yet touched).
+/// The whole aligned huge pages inside the `bytes` bytes at address `start`, as the
+/// address of the first and their length in bytes, when there is one.
+fn whole_pages(start: usize, bytes: usize) -> Option<(usize, usize)> {
+    let first = start.next_multiple_of(HUGE_PAGE);
+    let last = (start + bytes) / HUGE_PAGE * HUGE_PAGE;
+    (first < last).then(|| (first, last - first))
+}
+
+/// Advises the whole huge pages inside the `n` items at `p` (an allocation of at least
+/// `n` items).
 #[cfg(target_os = "linux")]
 fn advise<T>(p: *mut T, n: usize) {
-    let (start, end) = (p as usize, p as usize + n * std::mem::size_of::<T>());
-    let (first, last) = (
-        start.next_multiple_of(HUGE_PAGE),
-        end / HUGE_PAGE * HUGE_PAGE,
-    );
-    if first < last {
-        // SAFETY: `[first, last)` lies inside the allocation of `n` items at `p`, which
-        // this process owns; MADV_HUGEPAGE changes only how those pages are mapped, never
-        // their contents, and a refusal (an error return) is harmless and ignored.
+    if let Some((first, len)) = whole_pages(p as usize, n * std::mem::size_of::<T>()) {
+        // SAFETY: `[first, first + len)` lies inside the allocation of `n` items at `p`, which
+        // this process owns (`whole_pages` gives only pages inside its range: unit
+        // tested); MADV_HUGEPAGE changes only how those pages are mapped, never their
+        // contents, and a refusal (an error return) is harmless and ignored.
         unsafe {
-            libc::madvise(
-                first as *mut libc::c_void,
-                last - first,
-                libc::MADV_HUGEPAGE,
-            );
+            libc::madvise(first as *mut libc::c_void, len, libc::MADV_HUGEPAGE);
         }
     }
 }
@@ -97,20 +104,19 @@ mod tests {
                 }
             }
         }
-        panic!("no mapping holds {addr:#x} in /proc/self/smaps")
+        panic!(
+            "no mapping with a VmFlags line holds {addr:#x} in /proc/self/smaps (an older \
+         kernel prints no VmFlags: then this test cannot see the advice)"
+        )
     }
 
     /// The `VmFlags` of the first or the last of the whole huge pages inside the `bytes`
     /// at `p` that lacks `hg` (the advice), if one does.
     #[cfg(target_os = "linux")]
     fn unadvised<T>(p: *const T, bytes: usize) -> Option<String> {
-        let first = (p as usize).next_multiple_of(HUGE_PAGE);
-        let last = (p as usize + bytes) / HUGE_PAGE * HUGE_PAGE;
-        assert!(
-            first < last,
-            "no whole huge page inside {bytes} bytes at {p:?}"
-        );
-        [first, last - 1]
+        let (first, len) = whole_pages(p as usize, bytes)
+            .unwrap_or_else(|| panic!("no whole huge page inside {bytes} bytes at {p:?}"));
+        [first, first + len - 1]
             .into_iter()
             .map(vm_flags)
             .find(|f| !f.split(' ').any(|x| x == "hg"))
@@ -140,6 +146,29 @@ mod tests {
         }
     }
 
+    /// `whole_pages` gives exactly the aligned 2 MiB pages that lie wholly inside the
+    /// range (start and length): none outside it, none of those inside left out.
+    #[test]
+    fn whole_pages_are_those_inside_the_range() {
+        let h = HUGE_PAGE;
+        for (start, bytes, want) in [
+            (0, 2 * h, Some((0, 2 * h))),
+            (16, 2 * h, Some((h, h))),
+            (16, 3 * h, Some((h, 2 * h))),
+            (h - 1, h, None),
+            (h - 1, h + 1, Some((h, h))),
+            (5 * h + 4096, 3 * h - 4096, Some((6 * h, 2 * h))),
+            (5 * h + 4096, 3 * h - 4097, Some((6 * h, h))),
+            (7 * h, 0, None),
+        ] {
+            assert_eq!(
+                whole_pages(start, bytes),
+                want,
+                "whole huge pages inside {bytes} bytes at {start:#x} (pages::whole_pages)"
+            );
+        }
+    }
+
     #[test]
     fn small_arrays_stay_where_they_are() {
         let v: Vec<u64> = (0..(HUGE_ABOVE / 8 - 1) as u64).collect();
@@ -150,7 +179,10 @@ mod tests {
             p,
             "an array under HUGE_ABOVE bytes was copied (pages::on_huge_pages)"
         );
-        // From HUGE_ABOVE bytes on, an array moves (into advised memory).
+        // From HUGE_ABOVE bytes on, an array moves (into advised memory), on Linux.
+        if !cfg!(target_os = "linux") {
+            return;
+        }
         let v: Vec<u64> = (0..(HUGE_ABOVE / 8) as u64).collect();
         let p = v.as_ptr();
         let moved = on_huge_pages(v);

@@ -107,6 +107,7 @@ impl Mesh {
         let mut triangles = Vec::with_capacity(boxes.len());
         let mut given = Vec::with_capacity(boxes.len());
         let mut packs = crate::pages::huge_with_capacity(slots.len() / 4);
+        let advised = packs.as_ptr();
         let mut pack_tris = Vec::with_capacity(slots.len() / 4);
         for chunk in slots.chunks(4) {
             let mut verts = Vec::with_capacity(4);
@@ -122,6 +123,11 @@ impl Mesh {
             packs.push(TriPack::new(&verts));
             pack_tris.push(ids);
         }
+        debug_assert_eq!(
+            packs.as_ptr(),
+            advised,
+            "the packs outgrew their advised memory (one per four slots)"
+        );
         Ok(Mesh {
             positions,
             normals,

@@ -335,11 +335,12 @@ mod tests {
     /// the scalar test recomputes all three in f64 (so the other two, and the
     /// barycentrics, can differ in their last bits from the render-precision values). A
     /// lane with any one edge function exactly 0 must take that fallback, not only a lane
-    /// with all three 0.
+    /// with all three 0. Every third pack repeats a triangle in its last lane: a tie at
+    /// the same `t`, which the lower lane must win, as in the loop.
     #[test]
     fn hit4_is_the_scalar_loop_bit_for_bit() {
         let mut rng = Rng(42);
-        let (mut hits, mut edge_hits, mut differs) = (0, 0, 0);
+        let (mut hits, mut edge_hits, mut differs, mut ties_won) = (0, 0, 0, 0);
         for case in 0..6000 {
             let lanes = 1 + case % 4;
             // A ray along +z from above the origin: the shear is the identity, and a
@@ -378,10 +379,11 @@ mod tests {
                 };
                 tris.push(tri);
             }
-            // Every third case has two lanes with the same triangle, the second its last:
-            // a tie, which the lowest lane wins.
-            if case % 3 == 0 && lanes > 1 {
-                tris[lanes - 1] = tris[case % (lanes - 1)];
+            // Every third case has two lanes with the same triangle, the second its last
+            // and the first any other: a tie, which the lower lane wins.
+            let tie = (case % 3 == 0 && lanes > 1).then(|| case / 12 % (lanes - 1));
+            if let Some(k) = tie {
+                tris[lanes - 1] = tris[k];
             }
             let pack = TriPack::new(&tris);
             for (t_min, t_max) in [(0.0, Real::INFINITY), (2.5, 3.5)] {
@@ -397,6 +399,7 @@ mod tests {
                      scalar loop {want:?} (renderer/src/shapes/triangle.rs, WoopRay::hit4)"
                 );
                 hits += usize::from(want.is_some());
+                ties_won += usize::from(tie.is_some() && want.map(|w| w.0) == tie);
                 edge_hits += usize::from(on_edge && want.is_some());
                 // How often the render-precision edge functions would have given other
                 // barycentrics than the f64 fallback (what the fallback is for).
@@ -419,8 +422,9 @@ mod tests {
             0
         };
         assert!(
-            hits > 2000 && edge_hits > 1000 && differs >= needed,
-            "{hits} hits, {edge_hits} on edges, {differs} where the fallback changes bits"
+            hits > 2000 && edge_hits > 1000 && differs >= needed && ties_won > 100,
+            "{hits} hits, {edge_hits} on edges, {differs} where the fallback changes bits, \
+             {ties_won} won by the lower of two tied lanes"
         );
     }
 }
