@@ -323,7 +323,8 @@ fn profile(set: &str, passes: usize) {
 
 /// `peers profile growth-N PASSES`: passes of the cost-growth scene of N triangles (100,
 /// 10000 or 1000000: the UV spheres `growth` times), 128² primary rays through
-/// `intersect_many` as there.
+/// `intersect_many` as there. Under Callgrind, count the passes alone with
+/// `--toggle-collect='peers::common::trace_all'` (a function of its own in this binary).
 fn profile_growth(n: &str, passes: usize) {
     let Some(&(nu, nv)) = [
         ("100", (10, 5)),
