@@ -737,9 +737,11 @@ impl Walk {
                 // node is a descent. (Large primitives, such as a ground quad, sit in
                 // leaves near the root; a shadow ray that crosses one needs nothing else.)
                 // The stack keeps each lane's entry distance either way.
-                let mut leaves_first;
+                // (The copy is always written: made only under `if any`, it cost the
+                // sphere walk +8.6 % instructions in the count gate, as the compiler laid
+                // the step out otherwise; unused, the closest-hit walk drops it.)
+                let mut leaves_first = near;
                 let key = if any {
-                    leaves_first = near;
                     for (k, c) in leaves_first.iter_mut().zip(n.count) {
                         if c > 0 {
                             *k = Real::NEG_INFINITY;
