@@ -8,7 +8,7 @@
 //! is not counted. Everything runs on one thread, so the counts are deterministic.
 
 use gungraun::prelude::*;
-use renderer::aggregate::{Aggregate, Instance, Shape};
+use renderer::aggregate::Aggregate;
 use renderer::render::{render, Options};
 use renderer::scene::Scene;
 use std::hint::black_box;
@@ -21,12 +21,7 @@ const CATALOG: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../conformance/scene
 
 /// The 100,000-triangle mesh as the only instance of an aggregate.
 fn mesh_scene() -> Aggregate {
-    Aggregate::new(vec![Instance {
-        shape: Shape::Mesh(Arc::new(common::mesh(250, 200))),
-        xf: None,
-        material: 0,
-        object_id: 1,
-    }])
+    common::one_mesh(Arc::new(common::mesh(250, 200)))
 }
 
 fn catalog_scene(rel: &str) -> Scene {

@@ -11,7 +11,7 @@
 //! Run it through the script: `cargo bench -p renderer --bench peers -- mesh DIR`.
 
 use glam::DVec3;
-use renderer::aggregate::{Aggregate, Instance, Shape};
+use renderer::aggregate::Aggregate;
 use renderer::ray::Ray;
 use renderer::real::{Real, Vec3};
 use renderer::shapes::Mesh;
@@ -242,12 +242,7 @@ fn mesh(dir: &Path, quick: bool) {
     let (pos, tris) = big_mesh();
     let t0 = Instant::now();
     let m = Mesh::new(pos.clone(), None, None, tris.clone()).unwrap();
-    let agg = Aggregate::new(vec![Instance {
-        shape: Shape::Mesh(Arc::new(m)),
-        xf: None,
-        material: 0,
-        object_id: 1,
-    }]);
+    let agg = common::one_mesh(Arc::new(m));
     let build = t0.elapsed().as_secs_f64();
     let (w, h) = (640, 480);
     let sets = ray_sets(&agg, w, h);
@@ -303,12 +298,7 @@ fn profile(set: &str, passes: usize) {
         return profile_growth(n, passes);
     }
     let (pos, tris) = big_mesh();
-    let agg = Aggregate::new(vec![Instance {
-        shape: Shape::Mesh(Arc::new(Mesh::new(pos, None, None, tris).unwrap())),
-        xf: None,
-        material: 0,
-        object_id: 1,
-    }]);
+    let agg = common::one_mesh(Arc::new(Mesh::new(pos, None, None, tris).unwrap()));
     let sets = ray_sets(&agg, 640, 480);
     let Some(s) = sets.iter().find(|s| s.name == set) else {
         eprintln!("no ray set {set} (coherent, shuffled, occlusion, bounce)");
@@ -326,23 +316,14 @@ fn profile(set: &str, passes: usize) {
 /// `intersect_many` as there. Under Callgrind, count the passes alone with
 /// `--toggle-collect='peers::common::trace_all'` (a function of its own in this binary).
 fn profile_growth(n: &str, passes: usize) {
-    let Some(&(nu, nv)) = [
-        ("100", (10, 5)),
-        ("10000", (100, 50)),
-        ("1000000", (1000, 500)),
-    ]
-    .iter()
-    .find(|(k, _)| *k == n)
-    .map(|(_, s)| s) else {
+    let Some(&(nu, nv)) = GROWTH_MESHES
+        .iter()
+        .find(|&&(nu, nv)| n.parse() == Ok(2 * nu * nv))
+    else {
         eprintln!("no growth scene of {n} triangles (100, 10000, 1000000)");
         std::process::exit(2);
     };
-    let agg = Aggregate::new(vec![Instance {
-        shape: Shape::Mesh(Arc::new(common::mesh(nu, nv))),
-        xf: None,
-        material: 0,
-        object_id: 1,
-    }]);
+    let agg = common::one_mesh(Arc::new(common::mesh(nu, nv)));
     let cam = common::camera();
     let mut hits = 0;
     for _ in 0..passes.max(1) {
@@ -412,6 +393,10 @@ fn growth_family(kind: &str, scenes: &[(usize, Aggregate)], rounds: usize) -> Ve
         .collect()
 }
 
+/// The cost-growth meshes: UV spheres of `2·nu·nv` triangles, 100, 10,000 and 1,000,000
+/// (`growth` times them, `profile growth-N` profiles one).
+const GROWTH_MESHES: [(usize, usize); 3] = [(10, 5), (100, 50), (1000, 500)];
+
 fn growth(quick: bool) {
     let rounds = if quick { 5 } else { 21 };
     let ns = [100usize, 10_000, 1_000_000];
@@ -428,17 +413,13 @@ fn growth(quick: bool) {
         let scenes: Vec<_> = ns.iter().map(|&n| (n, make(n))).collect();
         rows.extend(growth_family(kind, &scenes, rounds));
     }
-    // UV spheres of 2·nu·nv triangles: 100, 10,000 and 1,000,000.
-    let meshes: Vec<_> = [(10usize, 5usize), (100, 50), (1000, 500)]
+    let meshes: Vec<_> = GROWTH_MESHES
         .iter()
         .map(|&(nu, nv)| {
-            let agg = Aggregate::new(vec![Instance {
-                shape: Shape::Mesh(Arc::new(common::mesh(nu, nv))),
-                xf: None,
-                material: 0,
-                object_id: 1,
-            }]);
-            (2 * nu * nv, agg)
+            (
+                2 * nu * nv,
+                common::one_mesh(Arc::new(common::mesh(nu, nv))),
+            )
         })
         .collect();
     rows.extend(growth_family("triangles", &meshes, rounds));

@@ -15,8 +15,7 @@
 //! Each iteration traces the pixel-centre rays of a 128×128 camera on one thread.
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use renderer::aggregate::Shape;
-use renderer::aggregate::{Aggregate, Instance};
+use renderer::aggregate::Aggregate;
 use std::sync::Arc;
 
 mod common;
@@ -39,12 +38,7 @@ fn bench(c: &mut Criterion) {
         }
     }
     let m = Arc::new(mesh(1000, 500));
-    let agg = Aggregate::new(vec![Instance {
-        shape: Shape::Mesh(m.clone()),
-        xf: None,
-        material: 0,
-        object_id: 1,
-    }]);
+    let agg = common::one_mesh(m.clone());
     g.bench_with_input(
         BenchmarkId::new("mesh_triangles", m.triangles.len()),
         &agg,

@@ -110,16 +110,25 @@ mod tests {
         )
     }
 
-    /// The `VmFlags` of the first or the last of the whole huge pages inside the `bytes`
-    /// at `p` that lacks `hg` (the advice), if one does.
+    /// Fails, naming `what`, unless the first and the last of the whole huge pages
+    /// inside the `bytes` at `p` carry `hg` (the advice). A kernel built without
+    /// transparent huge pages refuses the advice (and has no such directory): then there
+    /// is nothing to see.
     #[cfg(target_os = "linux")]
-    fn unadvised<T>(p: *const T, bytes: usize) -> Option<String> {
+    fn assert_advised<T>(p: *const T, bytes: usize, what: &str) {
+        if !std::path::Path::new("/sys/kernel/mm/transparent_hugepage").exists() {
+            return;
+        }
         let (first, len) = whole_pages(p as usize, bytes)
             .unwrap_or_else(|| panic!("no whole huge page inside {bytes} bytes at {p:?}"));
-        [first, first + len - 1]
-            .into_iter()
-            .map(vm_flags)
-            .find(|f| !f.split(' ').any(|x| x == "hg"))
+        for addr in [first, first + len - 1] {
+            let flags = vm_flags(addr);
+            assert!(
+                flags.split(' ').any(|x| x == "hg"),
+                "{what} of {bytes} bytes was not advised for huge pages, from its first whole \
+                 huge page to its last (pages::advise); VmFlags at {addr:#x}: {flags:?}"
+            );
+        }
     }
 
     #[test]
@@ -128,21 +137,11 @@ mod tests {
         let v: Vec<u64> = (0..n as u64).map(|k| k * 7 + 1).collect();
         let moved = on_huge_pages(v.clone());
         assert_eq!(moved, v, "on_huge_pages must copy every item in order");
-        // A kernel built without transparent huge pages refuses the advice (and has no
-        // such directory): then there is nothing to see.
         #[cfg(target_os = "linux")]
-        if std::path::Path::new("/sys/kernel/mm/transparent_hugepage").exists() {
-            if let Some(flags) = unadvised(moved.as_ptr(), n * 8) {
-                panic!(
-                    "an array of {} bytes was not advised for huge pages, from its first \
-                     whole huge page to its last (pages::advise); VmFlags {flags:?}",
-                    n * 8
-                );
-            }
+        {
+            assert_advised(moved.as_ptr(), n * 8, "on_huge_pages' copy");
             let empty: Vec<u64> = huge_with_capacity(n);
-            if let Some(flags) = unadvised(empty.as_ptr(), n * 8) {
-                panic!("huge_with_capacity({n}) of u64 was not advised (pages::advise): {flags:?}");
-            }
+            assert_advised(empty.as_ptr(), n * 8, "huge_with_capacity's room");
         }
     }
 
@@ -199,14 +198,11 @@ mod tests {
     #[cfg(target_os = "linux")]
     #[test]
     fn room_for_large_arrays_is_advised() {
-        if !std::path::Path::new("/sys/kernel/mm/transparent_hugepage").exists() {
-            return;
-        }
         let v: Vec<u8> = huge_with_capacity(HUGE_ABOVE);
-        if let Some(flags) = unadvised(v.as_ptr(), HUGE_ABOVE) {
-            panic!(
-                "huge_with_capacity of HUGE_ABOVE bytes was not advised (pages::advise): {flags:?}"
-            );
-        }
+        assert_advised(
+            v.as_ptr(),
+            HUGE_ABOVE,
+            "huge_with_capacity's room of HUGE_ABOVE",
+        );
     }
 }

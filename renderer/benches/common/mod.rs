@@ -109,6 +109,17 @@ pub fn mesh(nu: usize, nv: usize) -> Mesh {
     Mesh::new(pos, None, None, tris).unwrap()
 }
 
+/// An aggregate whose only instance is `mesh`, unplaced (what every mesh benchmark
+/// traces).
+pub fn one_mesh(mesh: std::sync::Arc<Mesh>) -> Aggregate {
+    Aggregate::new(vec![Instance {
+        shape: Shape::Mesh(mesh),
+        xf: None,
+        material: 0,
+        object_id: 1,
+    }])
+}
+
 /// Traces every pixel-centre ray on this thread, a row at a time through
 /// `Aggregate::intersect_many` as the renderer traces camera rays; returns the number of
 /// hits.
