@@ -297,6 +297,9 @@ pub struct PixelSampler {
     /// sample) that each dimension finishes with one more mix (the same bits as
     /// [`uniform`]).
     sample_mix: u64,
+    /// For the sobol sampler at a power-of-two count, the sample index with its bits
+    /// reversed: what [`PixelSampler::sobol_index`] shuffles.
+    sample_rev: u32,
     sample: u32,
     spp: u32,
     dim: u32,
@@ -316,6 +319,7 @@ impl PixelSampler {
             } else {
                 0
             },
+            sample_rev: sample.reverse_bits(),
             sample,
             spp,
             dim: 0,
@@ -325,6 +329,36 @@ impl PixelSampler {
 
     fn key(&self, dim: u32) -> u64 {
         hash_mixed(self.pixel_mix, 0x5eed_0000 + dim as u64, self.kind as u64)
+    }
+
+    /// The sobol sampler's 64 random bits for dimension `dim`: one mix of the pixel's hash
+    /// stepped by the dimension (SplitMix64's stream, which starts each pixel at its own
+    /// random place). A 2D point takes the keys of both its dimensions, two independent
+    /// mixes that run side by side.
+    #[inline(always)]
+    fn sobol_key(&self, dim: u32) -> u64 {
+        mix64(
+            self.pixel_mix
+                .wrapping_add((u64::from(dim) + 1).wrapping_mul(0xd1b5_4a32_d192_ed03)),
+        )
+    }
+
+    /// The Sobol index of this sample in the dimensions keyed by `seed`: the sample index
+    /// shuffled (Kollig and Keller), so that each pair of dimensions pairs the samples
+    /// differently. At a power-of-two count the shuffle is Owen's scrambling of the
+    /// index's bits read from the top (Burley 2020, section 4: `owen_reversed` of the
+    /// reversed index): every bit flips as a function of the bits above it, so the low
+    /// `m` bits of the result run over `0..2^m` once, and the first of them, which sets a
+    /// point's first digit, depends on all of them (a scrambling read from the bottom would
+    /// flip it by a constant, and every pair of dimensions would share their first digit).
+    /// Otherwise it is [`permute`].
+    #[inline(always)]
+    fn sobol_index(&self, seed: u32) -> u32 {
+        if self.spp.is_power_of_two() {
+            owen_reversed(self.sample_rev, seed) & (self.spp - 1)
+        } else {
+            permute(self.sample, self.spp, seed)
+        }
     }
 
     /// The next number in [0, 1).
@@ -342,9 +376,8 @@ impl PixelSampler {
                 )
             }
             SamplerKind::Sobol => {
-                let key = self.key(d);
-                let i = permute(self.sample, self.spp, key as u32);
-                let (a, _) = sobol_reversed(i);
+                let key = self.sobol_key(d);
+                let (a, _) = sobol_reversed(self.sobol_index(key as u32));
                 (owen_reversed(a, (key >> 32) as u32) as f64) * (1.0 / 4_294_967_296.0)
             }
         }
@@ -369,10 +402,9 @@ impl PixelSampler {
             SamplerKind::Sobol => {
                 let d = self.dim;
                 self.dim += 2;
-                let key = self.key(d);
-                let i = permute(self.sample, self.spp, key as u32);
-                let (a, b) = sobol_reversed(i);
-                let (sa, sb) = ((key >> 32) as u32, mix64(key) as u32);
+                let (key, second) = (self.sobol_key(d), self.sobol_key(d + 1));
+                let (a, b) = sobol_reversed(self.sobol_index(key as u32));
+                let (sa, sb) = ((key >> 32) as u32, second as u32);
                 let s = 1.0 / 4_294_967_296.0;
                 (
                     owen_reversed(a, sa) as f64 * s,
@@ -515,11 +547,14 @@ mod tests {
     }
 
     /// Sample 5 of 16 in pixel 77, its first two 2D points and two 1D numbers, as 32-bit
-    /// fractions: what the sobol sampler gave before its tables (d6dd87d).
+    /// fractions: what the sobol sampler gives since its keys became one mix per dimension
+    /// and its shuffle at powers of two Owen's scrambling of the index (2026-11-25; before,
+    /// from d6dd87d on, they were (3945344138, 3295374891), (1067349807, 2336251960) and
+    /// (1763481376, 1255205158)).
     const PINNED_SOBOL: [(u32, u32); 3] = [
-        (3_945_344_138, 3_295_374_891),
-        (1_067_349_807, 2_336_251_960),
-        (1_763_481_376, 1_255_205_158),
+        (2_662_843_107, 3_367_179_604),
+        (2_869_945_806, 2_921_466_453),
+        (2_672_533_897, 1_246_412_272),
     ];
 
     /// Sample 5 in pixel 77 of the stratified sampler at 16, 8, 12 and 9 spp (square and a
