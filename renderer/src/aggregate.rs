@@ -228,8 +228,7 @@ impl Instance {
         let mut h = self.shape.complete::<UV>(h);
         if let Some(x) = &self.xf {
             (h.p, h.err) = x.point_with_error(h.p, h.err);
-            h.n_geo = x.normal(h.n_geo);
-            h.n_shade = x.normal(h.n_shade);
+            h.map_normals(|n| x.normal(n));
         }
         h.inherit(self.material, self.object_id)
     }
@@ -316,8 +315,7 @@ impl Lead {
         let m = Mat3::from_diagonal(Vec3::splat(self.r));
         let inv = Mat3::from_diagonal(Vec3::splat(self.s));
         (h.p, h.err) = map_point_with_error(&m, self.c, h.p, h.err);
-        h.n_geo = map_normal(&inv, h.n_geo);
-        h.n_shade = map_normal(&inv, h.n_shade);
+        h.map_normals(|n| map_normal(&inv, n));
         h.inherit(self.material, self.object_id)
     }
 }

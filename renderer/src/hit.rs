@@ -51,6 +51,23 @@ impl Hit {
         }
     }
 
+    /// Whether the shading normal is the geometric one, bit for bit (a flat-shaded
+    /// surface: every shape but smooth triangles). Then whatever maps or normalizes one
+    /// gives the other's result too, and is done once.
+    #[inline]
+    pub(crate) fn flat_shaded(&self) -> bool {
+        self.n_shade.to_array().map(Real::to_bits) == self.n_geo.to_array().map(Real::to_bits)
+    }
+
+    /// Maps both normals by `map`, the shading normal only when it differs from the
+    /// geometric one (the same bits as mapping each).
+    #[inline]
+    pub(crate) fn map_normals(&mut self, map: impl Fn(Vec3) -> Vec3) {
+        let flat = self.flat_shaded();
+        self.n_geo = map(self.n_geo);
+        self.n_shade = if flat { self.n_geo } else { map(self.n_shade) };
+    }
+
     /// Fills in the material and object id still unassigned, from an enclosing instance.
     #[inline]
     pub(crate) fn inherit(mut self, material: u32, object_id: u32) -> Hit {

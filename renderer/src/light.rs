@@ -55,6 +55,18 @@ pub struct AreaLight {
     /// world centre and radius, so that it is sampled by the cone of directions it
     /// subtends (as Mitsuba 3 samples its `sphere` emitter) instead of by area.
     ball: Option<(DVec3, f64)>,
+    /// For a rectangle, what is the same at every point of it: its world normal
+    /// (`m⁻ᵀ·y`, as its hits report it) made unit, and its area density
+    /// ([`AreaLight::pdf_area`]). [`AreaLight::sample_from`] reads them rather than
+    /// computing them per sample (the same bits).
+    flat: Option<(DVec3, Real)>,
+}
+
+/// The density of a sampled light point: per solid angle (a sphere's cone) or per area.
+#[derive(Clone, Copy)]
+enum Density {
+    Cone(f64),
+    Area(Real),
 }
 
 /// A point sampled on an area light, as seen from a shading point.
@@ -105,13 +117,22 @@ impl AreaLight {
             }
             _ => None,
         };
-        AreaLight {
+        let mut light = AreaLight {
             shape: inst.shape.clone(),
             xf: inst.xf,
             radiance,
             det,
             ball,
+            flat: None,
+        };
+        if !matches!(light.shape, Shape::Sphere) {
+            let n_world = light.sample((0.5, 0.5)).1;
+            light.flat = Some((
+                crate::real::dvec3(n_world).normalize(),
+                light.pdf_area(n_world),
+            ));
         }
+        light
     }
 
     /// The cone of directions the sphere subtends from `p`, when it is sampled by solid
@@ -138,8 +159,9 @@ impl AreaLight {
     /// sphere"); anything else uniformly by area ([`AreaLight::sample`]), with the density
     /// converted to solid angle. Uses one 2D sample either way.
     pub(crate) fn sample_from(&self, p: DVec3, u: (f64, f64)) -> LightSample {
-        // The point on the light, its unnormalized world normal, and the cone's density.
-        let (q, n_world, cone_pdf) = match self.cone(p) {
+        // The point on the light, its unit world normal, and the density: the cone's (per
+        // solid angle) or the area's.
+        let (q, unit_n, pdf) = match self.cone(p) {
             Some((axis, d, one_minus_cos_max)) => {
                 let (c, r) = self.ball.expect("a cone comes from a ball");
                 // cos θ uniform in [cos θ_max, 1]; sin²θ from 1 − cos θ without
@@ -159,14 +181,25 @@ impl AreaLight {
                 // of scale r is this over r; only its direction is used).
                 (
                     c + n * r,
-                    crate::real::vec3(n),
-                    Some(1.0 / (2.0 * PI * one_minus_cos_max)),
+                    crate::real::dvec3(crate::real::vec3(n)).normalize(),
+                    Density::Cone(1.0 / (2.0 * PI * one_minus_cos_max)),
                 )
             }
-            None => {
-                let (q, n_world) = self.sample(u);
-                (crate::real::dvec3(q), n_world, None)
-            }
+            None => match self.flat {
+                Some((unit_n, pdf_area)) => (
+                    crate::real::dvec3(self.sample_point(u)),
+                    unit_n,
+                    Density::Area(pdf_area),
+                ),
+                None => {
+                    let (q, n_world) = self.sample(u);
+                    (
+                        crate::real::dvec3(q),
+                        crate::real::dvec3(n_world).normalize(),
+                        Density::Area(self.pdf_area(n_world)),
+                    )
+                }
+            },
         };
         let to = q - p;
         let d2 = to.length_squared();
@@ -175,11 +208,11 @@ impl AreaLight {
         // Nothing to sample on the back of the light, nor where the shading point lies on
         // the light itself (its own surface counts as outside, by Mitsuba's margin) and
         // draws the point it stands on (distance 0: the cosine is NaN).
-        let cos_l = crate::real::dvec3(n_world).normalize().dot(-wi);
-        let pdf = if cos_l > 0.0 {
-            cone_pdf.unwrap_or_else(|| self.pdf_area(n_world) as f64 * d2 / cos_l)
-        } else {
-            0.0
+        let cos_l = unit_n.dot(-wi);
+        let pdf = match pdf {
+            _ if !(cos_l > 0.0) => 0.0,
+            Density::Cone(pdf) => pdf,
+            Density::Area(pdf_area) => pdf_area as f64 * d2 / cos_l,
         };
         LightSample { wi, dist, pdf }
     }
@@ -230,14 +263,27 @@ impl AreaLight {
                 let v = Vec3::new((r * cos_phi) as Real, z as Real, (r * sin_phi) as Real);
                 (v, v)
             }
-            _ => (
-                Vec3::new((2.0 * u.0 - 1.0) as Real, 0.0, (2.0 * u.1 - 1.0) as Real),
-                Vec3::Y,
-            ),
+            _ => (Self::rectangle_point(u), Vec3::Y),
         };
         match &self.xf {
             Some(x) => (x.point(p), x.normal(n)),
             None => (p, n),
         }
+    }
+
+    /// The world point of [`AreaLight::sample`] on a rectangle, without its normal.
+    #[inline]
+    fn sample_point(&self, u: (f64, f64)) -> Vec3 {
+        let p = Self::rectangle_point(u);
+        match &self.xf {
+            Some(x) => x.point(p),
+            None => p,
+        }
+    }
+
+    /// The canonical rectangle's point for `u`: [-1, 1]² in the plane y = 0.
+    #[inline]
+    fn rectangle_point(u: (f64, f64)) -> Vec3 {
+        Vec3::new((2.0 * u.0 - 1.0) as Real, 0.0, (2.0 * u.1 - 1.0) as Real)
     }
 }

@@ -200,10 +200,13 @@ impl<'a> PhysicalIntegrator<'a> {
 
     fn surface(&self, hit: &Hit) -> Surface<'a> {
         let ng = dv(hit.n_geo).normalize();
-        let mut ns = dv(hit.n_shade).normalize();
-        if !ns.is_finite() {
-            ns = ng;
-        }
+        let ns = if hit.flat_shaded() {
+            ng
+        } else {
+            Some(dv(hit.n_shade).normalize())
+                .filter(|ns| ns.is_finite())
+                .unwrap_or(ng)
+        };
         Surface {
             p: hit.p,
             err: hit.err,

@@ -167,7 +167,11 @@ impl<'a> Shader<'a> {
         let d = ray.d.normalize();
         let (p, err) = (hit.p, hit.err);
         let n_geo = hit.n_geo.normalize();
-        let mut n = hit.n_shade.normalize();
+        let mut n = if hit.flat_shaded() {
+            n_geo
+        } else {
+            hit.n_shade.normalize()
+        };
         if n.dot(d) > 0.0 {
             n = -n;
         }
