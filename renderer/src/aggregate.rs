@@ -137,6 +137,9 @@ impl Shape {
         match self {
             Shape::Sphere => shapes::sphere::hits(ray, t_min, t_max),
             Shape::Plane => shapes::flat::plane_hits(ray, t_min, t_max),
+            Shape::Rectangle => shapes::flat::rectangle_hits(ray, t_min, t_max),
+            Shape::Disk => shapes::flat::disk_hits(ray, t_min, t_max),
+            Shape::Cube => shapes::cube::hits(ray, t_min, t_max),
             Shape::Mesh(m) => m.occluded(ray, t_min, t_max),
             Shape::Group(g) => g.occluded(ray, t_min, t_max),
             _ => self.intersect(ray, t_min, t_max).is_some(),

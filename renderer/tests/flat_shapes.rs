@@ -172,3 +172,63 @@ fn rays_exactly_on_a_rectangle_edge_hit() {
         check_record(&Shape::Rectangle, &down, &h);
     }
 }
+
+/// A shadow ray's test (`Shape::occluded`, which for these shapes decides from `t` and
+/// the point alone, without building the hit record) says hit exactly when the full test
+/// returns a hit, over random rays and intervals: intervals that end just before or just
+/// after the hit's `t`, rays aimed at the edges and corners, and rays starting inside the
+/// box.
+#[test]
+fn shadow_tests_agree_with_the_full_tests() {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let shapes = [Shape::Plane, Shape::Rectangle, Shape::Disk, Shape::Cube];
+    let mut hits = [0usize; 4];
+    for i in 0..20_000 {
+        let mut v = |s: f64| [(); 3].map(|_| (next() * 2.0 - 1.0) * s);
+        let o = if i % 4 == 0 { v(0.9) } else { v(4.0) };
+        // Aimed at a point near the shapes' edges (|x|, |z| about 1) or anywhere.
+        let mut aim = v(1.2);
+        if i % 3 == 0 {
+            aim[0] = aim[0].signum();
+        }
+        let d = [aim[0] - o[0], aim[1] - o[1], aim[2] - o[2]];
+        let r = ray(o, d);
+        for (k, s) in shapes.iter().enumerate() {
+            let Some(h) = s.intersect(&r, 0.0, INF) else {
+                assert!(
+                    !s.occluded(&r, 0.0, INF),
+                    "{s:?}: occluded but no hit, ray {i}"
+                );
+                continue;
+            };
+            hits[k] += 1;
+            let t = h.t;
+            for (lo, hi) in [
+                (0.0, INF),
+                (0.0, t),
+                (0.0, t.next_up()),
+                (t, INF),
+                (t.next_down(), INF),
+                (t * 0.5, t * 2.0),
+                (t * 0.999, t * 1.001),
+            ] {
+                assert_eq!(
+                    s.occluded(&r, lo, hi),
+                    s.intersect(&r, lo, hi).is_some(),
+                    "{s:?}, ray {i} ({o:?} + t {d:?}), interval ({lo}, {hi}): the shadow test \
+                     and the full test disagree (renderer/src/shapes/flat.rs, cube.rs)"
+                );
+            }
+        }
+    }
+    assert!(
+        hits.iter().all(|&h| h > 1000),
+        "too few hits to compare: {hits:?}"
+    );
+}

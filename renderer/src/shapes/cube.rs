@@ -6,9 +6,10 @@ use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{gamma, Real, Vec2, Vec3};
 
-/// Closest hit on the cube.
+/// The cube's first crossing with `t_min < t < t_max`: `t`, the axis of the face, and
+/// whether the ray enters there (else it leaves).
 #[inline]
-pub fn intersect(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+fn crossing(ray: &Ray, t_min: Real, t_max: Real) -> Option<(Real, usize, bool)> {
     let mut near = Real::NEG_INFINITY;
     let mut far = Real::INFINITY;
     let (mut near_axis, mut far_axis) = (0usize, 0usize);
@@ -37,13 +38,26 @@ pub fn intersect(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     if near > far {
         return None;
     }
-    let (t, axis, entering) = if near > t_min && near < t_max {
-        (near, near_axis, true)
+    if near > t_min && near < t_max {
+        Some((near, near_axis, true))
     } else if far > t_min && far < t_max {
-        (far, far_axis, false)
+        Some((far, far_axis, false))
     } else {
-        return None;
-    };
+        None
+    }
+}
+
+/// Whether the ray hits the cube with `t_min < t < t_max`: exactly when [`intersect`]
+/// returns a hit.
+#[inline]
+pub fn hits(ray: &Ray, t_min: Real, t_max: Real) -> bool {
+    crossing(ray, t_min, t_max).is_some()
+}
+
+/// Closest hit on the cube.
+#[inline]
+pub fn intersect(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+    let (t, axis, entering) = crossing(ray, t_min, t_max)?;
     let mut n = Vec3::ZERO;
     let s = if entering {
         -ray.d[axis].signum()

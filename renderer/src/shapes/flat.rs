@@ -38,14 +38,42 @@ pub fn plane(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     Some(local_hit(t, p, err, Vec3::Y, Vec2::new(p.x, p.z)))
 }
 
+/// Whether the point of the plane y = 0 at `t` lies off the unit disk.
+#[inline]
+fn off_disk(ray: &Ray, t: Real) -> bool {
+    let p = ray.at(t);
+    p.x * p.x + p.z * p.z > 1.0
+}
+
+/// Whether the point of the plane y = 0 at `t` lies off the rectangle [−1, 1]².
+#[inline]
+fn off_rectangle(ray: &Ray, t: Real) -> bool {
+    let p = ray.at(t);
+    p.x.abs() > 1.0 || p.z.abs() > 1.0
+}
+
+/// Whether the ray hits the unit disk with `t_min < t < t_max`: exactly when [`disk`]
+/// returns a hit (the same test on the same values, without the record).
+#[inline]
+pub fn disk_hits(ray: &Ray, t_min: Real, t_max: Real) -> bool {
+    plane_t(ray, t_min, t_max).is_some_and(|t| !off_disk(ray, t))
+}
+
+/// Whether the ray hits the rectangle [−1, 1]² with `t_min < t < t_max`: exactly when
+/// [`rectangle`] returns a hit.
+#[inline]
+pub fn rectangle_hits(ray: &Ray, t_min: Real, t_max: Real) -> bool {
+    plane_t(ray, t_min, t_max).is_some_and(|t| !off_rectangle(ray, t))
+}
+
 /// The unit disk; uv map [−1, 1]² to [0, 1]².
 #[inline]
 pub fn disk(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     let t = plane_t(ray, t_min, t_max)?;
-    let (p, err) = on_plane(ray, t);
-    if p.x * p.x + p.z * p.z > 1.0 {
+    if off_disk(ray, t) {
         return None;
     }
+    let (p, err) = on_plane(ray, t);
     Some(local_hit(
         t,
         p,
@@ -59,10 +87,10 @@ pub fn disk(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
 #[inline]
 pub fn rectangle(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     let t = plane_t(ray, t_min, t_max)?;
-    let (p, err) = on_plane(ray, t);
-    if p.x.abs() > 1.0 || p.z.abs() > 1.0 {
+    if off_rectangle(ray, t) {
         return None;
     }
+    let (p, err) = on_plane(ray, t);
     Some(local_hit(
         t,
         p,
