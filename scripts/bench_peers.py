@@ -14,8 +14,9 @@ the range of the per-pair ratios. Writes OUTDIR/peers.md and OUTDIR/peers.json.
   pixel centres (-A), 2 threads; whole-process wall and CPU time, and POV-Ray's own
   trace time.
 - Mitsuba 3 (scalar_rgb): four catalog scenes at 256 x 256; samples per second at equal
-  spp, and the time to reach the RMSE of Mitsuba's 256-spp image against a high-spp
-  reference, ours against Mitsuba's best sampler for the scene.
+  spp, and the time to reach the RMSE of Mitsuba's 256-spp independent image (each image's
+  own error, the reference's noise taken off; the sample count where each sampler gets
+  there, from renders at 4 to 256 spp), ours against Mitsuba's best sampler for the scene.
 - Cost growth: time per primary ray from 100 to 10^6 spheres and triangles (ours).
 """
 
@@ -210,25 +211,56 @@ def povray(outdir, quick):
 
 MI_SCENES = ["mi_area_soft_shadow", "mi_mirror_sphere", "mi_glass_sphere", "mi_cornell"]
 MI_SAMPLERS = ["independent", "stratified", "multijitter", "ldsampler"]
+# The reference's sampler: stratified, so that its own noise is far below the errors it measures.
+REF_SAMPLER = "multijitter"
 OURS_SAMPLERS = ["independent", "stratified", "sobol"]
+
+
+def crossing(pts, target):
+    """The sample count at which an error ladder [(spp, error)] (ascending spp) first
+    reaches `target`: interpolated in log-log between the two counts around the crossing
+    (error falls as a power of the count between them); extrapolated from the last count
+    at 1/sqrt(spp) when the ladder never reaches it, and from the first when its first
+    count is already below."""
+    prev = None
+    for spp, e in pts:
+        if e <= target:
+            if prev is None or e <= 0.0:
+                return spp if e <= 0.0 else spp * (e / target) ** 2
+            s0, e0 = prev
+            f = (math.log(e0) - math.log(target)) / (math.log(e0) - math.log(e))
+            return math.exp(math.log(s0) + f * (math.log(spp) - math.log(s0)))
+        prev = (spp, e)
+    spp, e = pts[-1]
+    return spp * (e / target) ** 2
 
 
 def mitsuba(outdir, quick):
     import numpy as np
     import mitsuba as mi
     mi.set_variant("scalar_rgb")
+    mi.set_log_level(mi.LogLevel.Error)  # the samplers' notes on rounding their counts
     d = os.path.join(outdir, "mitsuba")
     os.makedirs(d, exist_ok=True)
     size = 128 if quick else 256
     ref_spp = 256 if quick else 2048
-    ladder = [4, 16] if quick else [16, 64, 256]
+    top = 16 if quick else 256
+    # Powers of 4: Mitsuba's ldsampler rounds a count up to a square power of two (at
+    # least 4) and its stratified sampler to a square; each point is placed at the count
+    # the sampler really took (`mi_count`).
+    ladder = [4 ** k for k in range(1, 5) if 4 ** k <= top]
     md = ["### Mitsuba 3 (scalar_rgb), the same scenes exported by our Mitsuba exporter", "",
-          f"{size} x {size}. Samples/s at {ladder[-1]} spp (ours 2 threads; Mitsuba's scalar variant uses every core). "
-          f"Time to RMSE: the time each needs to reach the RMSE of Mitsuba's {ladder[-1]}-spp independent image against a "
-          f"{ref_spp}-spp Mitsuba reference, from each one's {ladder[-1]}-spp render scaled by (RMSE / target)² (Monte Carlo error falls as 1/√time); Mitsuba's best sampler "
-          "for the scene is the one that gets there first, and so is ours (independent, stratified, sobol). Ratio = ours / best Mitsuba (below 1: we are faster).", "",
-          "| scene | ours Msamples/s | Mitsuba Msamples/s | our best sampler | its time to RMSE (s) | best Mitsuba sampler | its time (s) | ratio |",
-          "|---|---:|---:|---|---:|---|---:|---:|"]
+          f"{size} x {size}. Samples/s at {top} spp (ours 2 threads; Mitsuba's scalar variant uses every core). "
+          f"Time to RMSE: the time each needs to reach the RMSE of Mitsuba's {top}-spp independent image. Errors are "
+          f"the images' own: taken against the mean of two {ref_spp}-spp Mitsuba `{REF_SAMPLER}` references (seeds 7 "
+          "and 8), with the references' own noise (a quarter of their mean squared difference) taken off. Each "
+          f"sampler renders at {', '.join(map(str, ladder))} spp (the counts each really takes); the count where its error reaches the target is interpolated "
+          f"between the two around it (log-log), and its time is that count at the time per sample of its {top}-spp "
+          "render. Mitsuba's best sampler for the scene is the one that gets there first, and so is ours "
+          "(independent, stratified, sobol). Ratio = ours / best Mitsuba (below 1: we are faster).", "",
+          "| scene | ours Msamples/s | Mitsuba Msamples/s | our best sampler | its spp to target | its time (s) "
+          "| best Mitsuba sampler | its spp | its time (s) | ratio |",
+          "|---|---:|---:|---|---:|---:|---|---:|---:|---:|"]
     rows = []
     for name in MI_SCENES:
         text = open(os.path.join(ROOT, "conformance/scenes/mitsuba", name + ".toml")).read()
@@ -239,6 +271,11 @@ def mitsuba(outdir, quick):
         xml = os.path.join(d, name + ".xml")
         subprocess.run([CONFORMANCE, "export-mitsuba", toml, "-o", xml, "--spp", "16"], check=True)
         base_xml = open(xml).read()
+
+        def mi_count(sampler, spp):
+            smp = mi.load_dict({"type": sampler, "sample_count": 4})
+            smp.set_sample_count(spp)
+            return smp.sample_count()
 
         def mi_render(sampler, spp, seed=0):
             x = base_xml.replace('<sampler type="independent">', f'<sampler type="{sampler}">')
@@ -260,22 +297,22 @@ def mitsuba(outdir, quick):
             img = np.array(mi.Bitmap(out), dtype=np.float64)[:, :, :3]
             return max(secs, 1e-4), img
 
-        _, ref = mi_render("independent", ref_spp, seed=7)
-        rmse = lambda img: float(np.sqrt(np.mean((img[:, :, :3] - ref[:, :, :3]) ** 2)))
+        # The reference: two independent renders, whose difference measures their own
+        # noise (each pixel's error variance of the mean is a quarter of E[(r1 - r2)^2]).
+        _, r1 = mi_render(REF_SAMPLER, ref_spp, seed=7)
+        _, r2 = mi_render(REF_SAMPLER, ref_spp, seed=8)
+        ref = (r1[:, :, :3] + r2[:, :, :3]) / 2
+        floor2 = float(np.mean((r1[:, :, :3] - r2[:, :, :3]) ** 2)) / 4
+        # An image's own error: its mean squared difference to the reference, less the
+        # reference's own part (independent of the image's, so their squares add).
+        own = lambda img: math.sqrt(max(float(np.mean((img[:, :, :3] - ref) ** 2)) - floor2, 0.0))
 
-        def curve(render):
+        def ladder_of(render, count=lambda spp: spp):
             pts = []
             for spp in ladder:
                 t, img = render(spp)
-                pts.append((spp, t, rmse(img)))
+                pts.append((count(spp), t, own(img)))
             return pts
-
-        def time_to(pts, target):
-            # Monte Carlo error falls as 1/sqrt(time): scale the most-sampled point's time by
-            # (its RMSE / target)^2. (Exact for Mitsuba's independent sampler at the target
-            # spp; the error of the others is measured at the same spp, so it is close.)
-            spp, t, e = pts[-1]
-            return t * (e / target) ** 2
 
         # Ours and Mitsuba alternate sampler by sampler, so a slow phase of the machine
         # falls on both.
@@ -283,25 +320,31 @@ def mitsuba(outdir, quick):
         for k in range(max(len(OURS_SAMPLERS), len(MI_SAMPLERS))):
             if k < len(OURS_SAMPLERS):
                 s = OURS_SAMPLERS[k]
-                ours_pts[s] = curve(lambda spp, s=s: ours_render(s, spp))
+                ours_pts[s] = ladder_of(lambda spp, s=s: ours_render(s, spp))
             if k < len(MI_SAMPLERS):
                 s = MI_SAMPLERS[k]
-                mi_pts[s] = curve(lambda spp, s=s: mi_render(s, spp))
+                mi_pts[s] = ladder_of(lambda spp, s=s: mi_render(s, spp), lambda spp, s=s: mi_count(s, spp))
         target = mi_pts["independent"][-1][2]
-        ours_best = min(OURS_SAMPLERS, key=lambda s: time_to(ours_pts[s], target))
-        ours_t = time_to(ours_pts[ours_best], target)
-        best = min(MI_SAMPLERS, key=lambda s: time_to(mi_pts[s], target))
-        best_t = time_to(mi_pts[best], target)
-        px = size * size * ladder[-1]
+
+        def time_to(pts):
+            spp = crossing([(n, e) for n, _, e in pts], target)
+            return spp, spp * pts[-1][1] / pts[-1][0]
+
+        ours_best = min(OURS_SAMPLERS, key=lambda s: time_to(ours_pts[s])[1])
+        ours_spp, ours_t = time_to(ours_pts[ours_best])
+        best = min(MI_SAMPLERS, key=lambda s: time_to(mi_pts[s])[1])
+        best_spp, best_t = time_to(mi_pts[best])
+        px = size * size * top
         ours_rate = px / ours_pts["independent"][-1][1] / 1e6
         mi_rate = px / mi_pts["independent"][-1][1] / 1e6
-        rmse_at = {f"ours {s}": ours_pts[s][-1][2] for s in OURS_SAMPLERS}
-        rmse_at.update({f"mitsuba {s}": mi_pts[s][-1][2] for s in MI_SAMPLERS})
+        errors = {f"ours {s}": [(n, e) for n, _, e in ours_pts[s]] for s in OURS_SAMPLERS}
+        errors.update({f"mitsuba {s}": [(n, e) for n, _, e in mi_pts[s]] for s in MI_SAMPLERS})
         rows.append({"scene": name, "ours_msps": ours_rate, "mitsuba_msps": mi_rate, "ours_sampler": ours_best,
-                     "ours_time": ours_t, "best_sampler": best, "best_time": best_t, "ratio": ours_t / best_t,
-                     "target_rmse": target, "rmse_at_top_spp": rmse_at})
-        md.append(f"| {name} | {ours_rate:.2f} | {mi_rate:.2f} | {ours_best} | {ours_t:.3f} | {best} | {best_t:.3f} | "
-                  f"{ours_t / best_t:.2f} |")
+                     "ours_spp": ours_spp, "ours_time": ours_t, "best_sampler": best, "best_spp": best_spp,
+                     "best_time": best_t, "ratio": ours_t / best_t, "target_rmse": target,
+                     "reference_rmse": math.sqrt(floor2), "own_rmse_by_spp": errors})
+        md.append(f"| {name} | {ours_rate:.2f} | {mi_rate:.2f} | {ours_best} | {ours_spp:.1f} | {ours_t:.3f} | {best} | "
+                  f"{best_spp:.1f} | {best_t:.3f} | {ours_t / best_t:.2f} |")
     return md, {"mitsuba": rows}
 
 
