@@ -459,6 +459,9 @@ impl<const W: usize> Bvh<W> {
             return matches!(visit(first, count, t_max), Visit::Hit(_));
         }
         let mut w = Walk::new(ray, t_min, t_max, !any);
+        if self.nodes.len() == 1 {
+            return w.root_only(&self.nodes[0], any, &mut visit);
+        }
         if self.stack_need <= TINY_STACK {
             let mut stack = ArrayVec::<Entry, TINY_STACK>::new();
             while w.step::<_, _, _, ALL>(&mut stack, &self.nodes, any, &mut visit, ahead) {}
@@ -660,7 +663,74 @@ struct Walk {
     eager: bool,
 }
 
+/// The lanes of `mask` by ascending `key`, ties in lane order (an insertion sort, stable),
+/// and how many there are.
+#[inline(always)]
+fn sorted_lanes<const W: usize>(mask: u32, key: &[Real; W]) -> ([usize; W], usize) {
+    let mut lanes = [0usize; W];
+    let mut k = 0;
+    let mut m = mask;
+    while m != 0 {
+        let lane = m.trailing_zeros() as usize;
+        m &= m - 1;
+        let mut j = k;
+        while j > 0 && key[lanes[j - 1]] > key[lane] {
+            lanes[j] = lanes[j - 1];
+            j -= 1;
+        }
+        lanes[j] = lane;
+        k += 1;
+    }
+    (lanes, k)
+}
+
 impl Walk {
+    /// [`Walk::step`]'s whole walk for a tree of one node, whose lanes are all leaves (a
+    /// scene of up to `W` instances, a small mesh): the node's test, then its leaves in
+    /// the order the walk takes them (the nearest first for a closest hit, ties in lane
+    /// order; lane order for any hit, which takes leaves first and they all are), each
+    /// after the first only while its box still reaches the shrinking interval. The
+    /// same visits with the same intervals as the general walk, without its stack.
+    /// (Prefetch hints are skipped: a tree of one node is in cache.)
+    #[inline(always)]
+    fn root_only<const W: usize, F>(&self, n: &Node<W>, any: bool, visit: &mut F) -> bool
+    where
+        F: FnMut(u32, u8, Real) -> Visit,
+    {
+        let (near, mask) = n.hit(self);
+        if mask == 0 {
+            return false;
+        }
+        let (lanes, k) = if any {
+            let mut lanes = [0usize; W];
+            let mut k = 0;
+            let mut m = mask;
+            while m != 0 {
+                lanes[k] = m.trailing_zeros() as usize;
+                m &= m - 1;
+                k += 1;
+            }
+            (lanes, k)
+        } else {
+            sorted_lanes(mask, &near)
+        };
+        let grow = 1.0 + 2.0 * gamma(3);
+        let (mut t_max, mut hit) = (self.t_max, false);
+        for (i, &lane) in lanes[..k].iter().enumerate() {
+            if i > 0 && !(near[lane] <= t_max * grow) {
+                continue;
+            }
+            if let Visit::Hit(t) = visit(n.child[lane], n.count[lane], t_max) {
+                hit = true;
+                if any {
+                    return true;
+                }
+                t_max = t;
+            }
+        }
+        hit
+    }
+
     /// Pushes lane `lane` of node `n`, entered at `near`.
     #[inline(always)]
     fn push<const N: usize, const W: usize>(
@@ -765,20 +835,7 @@ impl Walk {
                     Walk::push(stack, n, b, near[b]);
                     a
                 } else {
-                    let mut lanes = [0usize; W];
-                    let mut k = 0;
-                    let mut m = mask;
-                    while m != 0 {
-                        let lane = m.trailing_zeros() as usize;
-                        m &= m - 1;
-                        let mut j = k;
-                        while j > 0 && key[lanes[j - 1]] > key[lane] {
-                            lanes[j] = lanes[j - 1];
-                            j -= 1;
-                        }
-                        lanes[j] = lane;
-                        k += 1;
-                    }
+                    let (lanes, k) = sorted_lanes(mask, key);
                     for &lane in lanes[1..k].iter().rev() {
                         Walk::push(stack, n, lane, near[lane]);
                     }
