@@ -222,12 +222,17 @@ def crossing(pts, target):
     (error falls as a power of the count between them); extrapolated from the last count
     at 1/sqrt(spp) when the ladder never reaches it, and from the first when its first
     count is already below."""
+    if not target > 0.0:
+        raise RuntimeError(f"target error {target}: Mitsuba's image measured no error of its own, "
+                           "so no time to reach it can be read (a reference as noisy as the image?)")
     prev = None
     for spp, e in pts:
         if e <= target:
-            if prev is None or e <= 0.0:
-                return spp if e <= 0.0 else spp * (e / target) ** 2
+            if prev is None:
+                return spp * (e / target) ** 2
             s0, e0 = prev
+            if e <= 0.0:
+                return s0  # the log-log line's limit as the error goes to 0
             f = (math.log(e0) - math.log(target)) / (math.log(e0) - math.log(e))
             return math.exp(math.log(s0) + f * (math.log(spp) - math.log(s0)))
         prev = (spp, e)
