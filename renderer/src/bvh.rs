@@ -707,19 +707,10 @@ impl Walk {
         if mask == 0 {
             return false;
         }
-        let (lanes, k) = if any {
-            let mut lanes = [0usize; W];
-            let mut k = 0;
-            let mut m = mask;
-            while m != 0 {
-                lanes[k] = m.trailing_zeros() as usize;
-                m &= m - 1;
-                k += 1;
-            }
-            (lanes, k)
-        } else {
-            sorted_lanes(mask, &near)
-        };
+        // The step's keys: an any-hit search puts leaves first, and all lanes are leaves,
+        // so they tie and keep lane order.
+        let key = if any { [Real::NEG_INFINITY; W] } else { near };
+        let (lanes, k) = sorted_lanes(mask, &key);
         let grow = 1.0 + 2.0 * gamma(3);
         let (mut t_max, mut hit) = (self.t_max, false);
         for (i, &lane) in lanes[..k].iter().enumerate() {

@@ -6,10 +6,10 @@ use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{gamma, Real, Vec2, Vec3};
 
-/// The hit point snapped exactly onto y = 0; only x and z carry rounding error.
+/// The ray's point `p` at a hit snapped exactly onto y = 0; only x and z carry rounding
+/// error.
 #[inline]
-fn on_plane(ray: &Ray, t: Real) -> (Vec3, Vec3) {
-    let mut p = ray.at(t);
+fn on_plane(mut p: Vec3) -> (Vec3, Vec3) {
     p.y = 0.0;
     (p, Vec3::new(p.x.abs(), 0.0, p.z.abs()) * gamma(4))
 }
@@ -34,21 +34,19 @@ pub fn plane_hits(ray: &Ray, t_min: Real, t_max: Real) -> bool {
 #[inline]
 pub fn plane(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     let t = plane_t(ray, t_min, t_max)?;
-    let (p, err) = on_plane(ray, t);
+    let (p, err) = on_plane(ray.at(t));
     Some(local_hit(t, p, err, Vec3::Y, Vec2::new(p.x, p.z)))
 }
 
-/// Whether the point of the plane y = 0 at `t` lies off the unit disk.
+/// Whether the ray's point `p` in the plane y = 0 lies off the unit disk.
 #[inline]
-fn off_disk(ray: &Ray, t: Real) -> bool {
-    let p = ray.at(t);
+fn off_disk(p: Vec3) -> bool {
     p.x * p.x + p.z * p.z > 1.0
 }
 
-/// Whether the point of the plane y = 0 at `t` lies off the rectangle [−1, 1]².
+/// Whether the ray's point `p` in the plane y = 0 lies off the rectangle [−1, 1]².
 #[inline]
-fn off_rectangle(ray: &Ray, t: Real) -> bool {
-    let p = ray.at(t);
+fn off_rectangle(p: Vec3) -> bool {
     p.x.abs() > 1.0 || p.z.abs() > 1.0
 }
 
@@ -56,24 +54,25 @@ fn off_rectangle(ray: &Ray, t: Real) -> bool {
 /// returns a hit (the same test on the same values, without the record).
 #[inline]
 pub fn disk_hits(ray: &Ray, t_min: Real, t_max: Real) -> bool {
-    plane_t(ray, t_min, t_max).is_some_and(|t| !off_disk(ray, t))
+    plane_t(ray, t_min, t_max).is_some_and(|t| !off_disk(ray.at(t)))
 }
 
 /// Whether the ray hits the rectangle [−1, 1]² with `t_min < t < t_max`: exactly when
 /// [`rectangle`] returns a hit.
 #[inline]
 pub fn rectangle_hits(ray: &Ray, t_min: Real, t_max: Real) -> bool {
-    plane_t(ray, t_min, t_max).is_some_and(|t| !off_rectangle(ray, t))
+    plane_t(ray, t_min, t_max).is_some_and(|t| !off_rectangle(ray.at(t)))
 }
 
 /// The unit disk; uv map [−1, 1]² to [0, 1]².
 #[inline]
 pub fn disk(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     let t = plane_t(ray, t_min, t_max)?;
-    if off_disk(ray, t) {
+    let at = ray.at(t);
+    if off_disk(at) {
         return None;
     }
-    let (p, err) = on_plane(ray, t);
+    let (p, err) = on_plane(at);
     Some(local_hit(
         t,
         p,
@@ -87,10 +86,11 @@ pub fn disk(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
 #[inline]
 pub fn rectangle(ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
     let t = plane_t(ray, t_min, t_max)?;
-    if off_rectangle(ray, t) {
+    let at = ray.at(t);
+    if off_rectangle(at) {
         return None;
     }
-    let (p, err) = on_plane(ray, t);
+    let (p, err) = on_plane(at);
     Some(local_hit(
         t,
         p,
