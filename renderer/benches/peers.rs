@@ -288,7 +288,7 @@ fn mesh(dir: &Path, quick: bool) {
     println!("{json}");
 }
 
-/// One pass of closest hit over one ray set of the mesh benchmark, on one thread, with no
+/// One pass of closest hit (any hit for `SET-any`) over one ray set of the mesh benchmark, on one thread, with no
 /// timing loop: for Callgrind (`valgrind --tool=callgrind --toggle-collect='peers::trace_set'
 /// BENCH profile shuffled`, BENCH being target/release/deps/peers-HASH, not its `.d` file),
 /// which then counts the traversal alone. `passes` > 1 repeats it, for a sampling profiler
@@ -297,16 +297,27 @@ fn profile(set: &str, passes: usize) {
     if let Some(n) = set.strip_prefix("growth-") {
         return profile_growth(n, passes);
     }
+    // `SET-any` profiles the search for any hit (`Aggregate::occluded`) instead.
+    let (name, any) = match set.strip_suffix("-any") {
+        Some(name) => (name, true),
+        None => (set, false),
+    };
     let (pos, tris) = big_mesh();
     let agg = common::one_mesh(Arc::new(Mesh::new(pos, None, None, tris).unwrap()));
     let sets = ray_sets(&agg, 640, 480);
-    let Some(s) = sets.iter().find(|s| s.name == set) else {
-        eprintln!("no ray set {set} (coherent, shuffled, occlusion, bounce)");
+    let Some(s) = sets.iter().find(|s| s.name == name) else {
+        eprintln!(
+            "no ray set {name} (coherent, shuffled, occlusion, bounce; each also as NAME-any)"
+        );
         std::process::exit(2);
     };
     let mut hits = 0;
     for _ in 0..passes.max(1) {
-        hits = trace_set(&agg, &s.rays);
+        hits = if any {
+            trace_set_any(&agg, &s.rays)
+        } else {
+            trace_set(&agg, &s.rays)
+        };
     }
     println!("{set}: {} rays, {hits} hits", s.rays.len());
 }
@@ -339,6 +350,14 @@ fn profile_growth(n: &str, passes: usize) {
 fn trace_set(agg: &Aggregate, rays: &[(Ray, Real)]) -> usize {
     rays.iter()
         .filter(|(r, t)| agg.intersect(r, 0.0, *t).is_some())
+        .count()
+}
+
+/// [`trace_set`] for any hit (under Callgrind: `--toggle-collect='peers::trace_set_any'`).
+#[inline(never)]
+fn trace_set_any(agg: &Aggregate, rays: &[(Ray, Real)]) -> usize {
+    rays.iter()
+        .filter(|(r, t)| agg.occluded(r, 0.0, *t))
         .count()
 }
 
@@ -447,7 +466,7 @@ fn main() {
             },
         ),
         _ => {
-            eprintln!("usage: peers mesh DIR [--quick] | peers growth [--quick] | peers profile SET|growth-N [PASSES] (see scripts/bench-peers.sh)");
+            eprintln!("usage: peers mesh DIR [--quick] | peers growth [--quick] | peers profile SET[-any]|growth-N [PASSES] (see scripts/bench-peers.sh)");
             std::process::exit(2);
         }
     }
