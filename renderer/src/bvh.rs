@@ -363,7 +363,7 @@ impl<const W: usize> Bvh<W> {
     }
 
     /// Visits, nearest box first, every primitive whose box the ray overlaps within
-    /// `(t_min, t_max)`. `visit(i, t_max)` tests primitive `i` and reports a hit, which
+    /// `(t_min, t_max)` (a tree of one primitive visits it without testing its box). `visit(i, t_max)` tests primitive `i` and reports a hit, which
     /// shrinks `t_max`. With `any`, traversal stops at the first hit. Returns whether
     /// anything was hit.
     #[inline]
@@ -372,13 +372,23 @@ impl<const W: usize> Bvh<W> {
         F: FnMut(u32, Real) -> Visit,
     {
         let mut leaves = each(any, &mut visit);
-        // A tree of one node that is not a single leaf (a scene of up to `W` instances):
-        // its leaves in the walk's order, without the walk's stack. Only here, for
-        // instances: in the walk itself (which meshes use too) the test made the
-        // 1M-triangle mesh's walks slower (any hit on coherent rays about 0.85×), where it
-        // is never taken.
-        if self.nodes.len() == 1 && self.single_leaf().is_none() {
-            return Walk::new(ray, t_min, t_max, !any).root_only(&self.nodes[0], any, &mut leaves);
+        // A tree of one node (a scene of up to `W` instances): its leaves in the walk's
+        // order, without the walk's stack. Only here, for instances: in the walk itself
+        // (which meshes use too) the test made the 1M-triangle mesh's walks slower (any
+        // hit on coherent rays about 0.85×), where it is never taken.
+        if self.nodes.len() == 1 {
+            return match self.single_leaf() {
+                // One primitive alone (a scene of one mesh or one definition, which
+                // test their own root first; or of one shape, whose own test costs
+                // about what a box test does): visited without the tree's box test,
+                // which would only repeat it (43 instructions a ray for any hit in a
+                // one-mesh scene). A box test only skips primitives: the same result.
+                Some((first, 1)) => matches!(leaves(first, 1, t_max), Visit::Hit(_)),
+                Some(_) => self.traverse_leaves(ray, t_min, t_max, any, leaves),
+                None => {
+                    Walk::new(ray, t_min, t_max, !any).root_only(&self.nodes[0], any, &mut leaves)
+                }
+            };
         }
         self.traverse_leaves(ray, t_min, t_max, any, leaves)
     }

@@ -269,6 +269,40 @@ fn random_scenes_match_brute_force() {
     }
 }
 
+/// A scene of one bounded instance (not a compact sphere) sends every search straight to
+/// it, without the tree's bounds test (`Aggregate::lone`): each kind of shape, under a
+/// random transform or none, with and without a plane beside it, against brute force
+/// (closest hit and any hit).
+#[test]
+fn one_instance_scenes_match_brute_force() {
+    let mut rng = SplitMix(77);
+    let mut kinds = std::collections::BTreeSet::new();
+    for k in 0..88 {
+        let with_plane = k % 2 == 1;
+        let (agg, extent) = random_scene(&mut rng, 1, with_plane);
+        let shape = &agg
+            .instances
+            .iter()
+            .find(|i| i.object_id == 1)
+            .unwrap()
+            .shape;
+        let kind = format!("{shape:?}");
+        kinds.insert(kind[..kind.find([' ', '(', '{']).unwrap_or(kind.len())].to_string());
+        let mut hits = 0;
+        for i in 0..400 {
+            let (r, t_min, t_max) = random_ray(&mut rng, &agg, extent);
+            let what = format!("one-instance scene {k} ({kind:.40}, plane: {with_plane}), ray {i}");
+            hits += agree(&agg, &r, t_min, t_max, &what) as usize;
+        }
+        assert!(hits > 0, "one-instance scene {k} ({kind:.40}): no ray hit");
+    }
+    assert_eq!(
+        kinds.len(),
+        9,
+        "not every kind of shape was drawn: {kinds:?}"
+    );
+}
+
 /// Axis-aligned boxes, cylinders and cones with exactly representable bounds, and rays that
 /// lie exactly in a plane of those bounds (direction components ±0): the boundary of a box
 /// belongs to it, so the BVH must not cull what brute force hits there.
