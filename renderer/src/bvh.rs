@@ -343,8 +343,9 @@ impl<const W: usize> Bvh<W> {
         (bvh, out)
     }
 
-    /// The tree's only leaf, when it is a single one: then traversal tests the tree's
-    /// bounds and visits the leaf directly, with no walk and no stack.
+    /// The tree's only leaf, when it is a single one: then traversal visits the leaf
+    /// directly, with no walk and no stack, after testing the tree's bounds (which
+    /// [`Bvh::traverse`] skips for a leaf of one primitive).
     #[inline]
     fn single_leaf(&self) -> Option<(u32, u8)> {
         let root = &self.nodes[0];
@@ -363,9 +364,9 @@ impl<const W: usize> Bvh<W> {
     }
 
     /// Visits, nearest box first, every primitive whose box the ray overlaps within
-    /// `(t_min, t_max)` (a tree of one primitive visits it without testing its box). `visit(i, t_max)` tests primitive `i` and reports a hit, which
-    /// shrinks `t_max`. With `any`, traversal stops at the first hit. Returns whether
-    /// anything was hit.
+    /// `(t_min, t_max)` (a tree of one primitive visits it without testing its box).
+    /// `visit(i, t_max)` tests primitive `i` and reports a hit, which shrinks `t_max`.
+    /// With `any`, traversal stops at the first hit. Returns whether anything was hit.
     #[inline]
     pub fn traverse<F>(&self, ray: &Ray, t_min: Real, t_max: Real, any: bool, mut visit: F) -> bool
     where
@@ -381,8 +382,9 @@ impl<const W: usize> Bvh<W> {
                 // One primitive alone (a scene of one mesh or one definition, which
                 // test their own root first; or of one shape, whose own test costs
                 // about what a box test does): visited without the tree's box test,
-                // which would only repeat it (43 instructions a ray for any hit in a
-                // one-mesh scene). A box test only skips primitives: the same result.
+                // which would only repeat it (in a one-mesh scene, 12 instructions a ray
+                // for the closest hit, 43 for any hit). Without a box test a search can
+                // only find more, never less; all 122 catalog scenes gave the same bits.
                 Some((first, 1)) => matches!(leaves(first, 1, t_max), Visit::Hit(_)),
                 Some(_) => self.traverse_leaves(ray, t_min, t_max, any, leaves),
                 None => {

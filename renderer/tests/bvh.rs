@@ -301,6 +301,40 @@ fn one_instance_scenes_match_brute_force() {
         9,
         "not every kind of shape was drawn: {kinds:?}"
     );
+    // A sphere placed by a uniform scale and a translation is a compact record (a lead),
+    // which the lone search tests by its own path.
+    for k in 0..8 {
+        let with_plane = k % 2 == 1;
+        let r = rng.range(0.3, 3.0);
+        let mut instances = vec![Instance {
+            shape: Shape::Sphere,
+            xf: Some(
+                Transform::new(&Affine64 {
+                    m: DMat3::from_diagonal(DVec3::splat(r)),
+                    d: rng.vec(-2.0, 2.0),
+                })
+                .unwrap(),
+            ),
+            material: 0,
+            object_id: 1,
+        }];
+        if with_plane {
+            instances.push(Instance {
+                shape: Shape::Plane,
+                xf: Some(Transform::new(&Affine64::translate(DVec3::new(0.0, -1.0, 0.0))).unwrap()),
+                material: 0,
+                object_id: 2,
+            });
+        }
+        let agg = Aggregate::new(instances);
+        let mut hits = 0;
+        for i in 0..400 {
+            let (ray, t_min, t_max) = random_ray(&mut rng, &agg, 4.0);
+            let what = format!("one compact sphere {k} (radius {r}, plane: {with_plane}), ray {i}");
+            hits += agree(&agg, &ray, t_min, t_max, &what) as usize;
+        }
+        assert!(hits > 0, "one compact sphere {k}: no ray hit");
+    }
 }
 
 /// Axis-aligned boxes, cylinders and cones with exactly representable bounds, and rays that
