@@ -289,9 +289,10 @@ fn mesh(dir: &Path, quick: bool) {
 }
 
 /// One pass of closest hit (any hit for `SET-any`) over one ray set of the mesh
-/// benchmark, on one thread, with no timing loop: for Callgrind (`valgrind --tool=callgrind --toggle-collect='peers::trace_set'
-/// BENCH profile shuffled`, BENCH being target/release/deps/peers-HASH, not its `.d` file),
-/// which then counts the traversal alone. `passes` > 1 repeats it, for a sampling profiler
+/// benchmark, on one thread, with no timing loop: for Callgrind (`valgrind
+/// --tool=callgrind --toggle-collect='peers::trace_set*' BENCH profile shuffled`, BENCH
+/// being target/release/deps/peers-HASH, not its `.d` file), which then counts the
+/// traversal alone. `passes` > 1 repeats it, for a sampling profiler
 /// (`perf record -e cpu-clock`), whose samples would otherwise fall mostly in the build.
 fn profile(set: &str, passes: usize) {
     if let Some(n) = set.strip_prefix("growth-") {

@@ -342,14 +342,6 @@ pub struct Aggregate {
     /// Surfaces below this aggregate ([`Shape::surfaces`] summed), or `u64::MAX` when
     /// that overflows (the scene builder refuses such a scene).
     surfaces: u64,
-    /// Whether the tree holds one instance (a scene of one mesh, say): the search for any
-    /// hit then asks it directly, without the tree's walk (whose box test
-    /// [`Bvh::traverse`] skips for a lone primitive anyway; on the peers bench's one-mesh
-    /// scene the walk cost another 52 instructions a ray for any hit). The same check in the search
-    /// for the closest hit cost the frames of many instances, which never take it, 0.3
-    /// to 0.8 % instructions (the compiler laid `intersect_with` out otherwise) for 1.7 %
-    /// on a one-mesh scene; there [`Bvh::traverse`]'s shortcut does most of it.
-    lone: bool,
 }
 
 impl Aggregate {
@@ -370,7 +362,6 @@ impl Aggregate {
         }
         let instances: Vec<Instance> = tagged.into_iter().map(|(_, i)| i).collect();
         let (surface_base, surfaces) = surface_offsets(&instances);
-        let lone = leads.len() == 1;
         Aggregate {
             instances,
             leads,
@@ -378,7 +369,6 @@ impl Aggregate {
             scene_order,
             surface_base,
             surfaces,
-            lone,
         }
     }
 
@@ -651,7 +641,14 @@ impl Aggregate {
         {
             return true;
         }
-        if self.lone {
+        // A tree of one instance (a scene of one mesh, say): asked directly, without the
+        // tree's walk (whose box test `Bvh::traverse` skips for a lone primitive anyway;
+        // on the peers bench's one-mesh scene the walk cost another 52 instructions a ray
+        // for any hit). The same shortcut in the search for the closest hit cost the
+        // frames of many instances, which never take it, 0.3 to 0.8 % instructions (the
+        // compiler laid `intersect_with` out otherwise) for 1.7 % on a one-mesh scene;
+        // there `Bvh::traverse`'s shortcut does most of it.
+        if self.bounded() == 1 {
             return self.occludes(0, ray, t_min, t_max);
         }
         self.bounded() > 0

@@ -10,8 +10,9 @@
 //!   hash-based Owen scrambling", with Vegdahl's 2021 constants) and with the sample index
 //!   shuffled per dimension pair (Kollig and Keller 2002, "Efficient multidimensional
 //!   sampling"; at power-of-two counts by the same scrambling of the index's bits, read
-//!   from the top, as Burley does): low discrepancy in every pair of dimensions, and each point uniformly
-//!   random inside its elementary intervals, which a random XOR (a digital shift) is not.
+//!   from the top, as Burley does): low discrepancy in every pair of dimensions, and each
+//!   point uniformly random inside its elementary intervals, which a random XOR (a
+//!   digital shift) is not.
 
 /// Which sampler places the samples.
 #[derive(

@@ -269,10 +269,10 @@ fn random_scenes_match_brute_force() {
     }
 }
 
-/// A scene of one bounded instance (not a compact sphere) sends every search straight to
-/// it, without the tree's bounds test (`Aggregate::lone`): each kind of shape, under a
-/// random transform or none, with and without a plane beside it, against brute force
-/// (closest hit and any hit).
+/// A scene of one bounded instance sends every search straight to it, without the tree's
+/// bounds test: each kind of shape, under a random transform or none, and a compact
+/// sphere, with and without a plane beside it, against brute force (closest hit and any
+/// hit).
 #[test]
 fn one_instance_scenes_match_brute_force() {
     let mut rng = SplitMix(77);
