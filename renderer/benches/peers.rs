@@ -313,6 +313,7 @@ fn profile(set: &str, passes: usize) {
         std::process::exit(2);
     };
     let mut hits = 0;
+    let t0 = Instant::now();
     for _ in 0..passes.max(1) {
         hits = if any {
             trace_set_any(&agg, &s.rays)
@@ -320,7 +321,12 @@ fn profile(set: &str, passes: usize) {
             trace_set(&agg, &s.rays)
         };
     }
-    println!("{set}: {} rays, {hits} hits", s.rays.len());
+    let rate = (passes.max(1) * s.rays.len()) as f64 / t0.elapsed().as_secs_f64() / 1e6;
+    println!(
+        "{set}: {} rays, {hits} hits, {rate:.3} Mrays/s over {} pass(es)",
+        s.rays.len(),
+        passes.max(1)
+    );
 }
 
 /// `peers profile growth-N PASSES`: passes of the cost-growth scene of N triangles (100,
@@ -338,12 +344,15 @@ fn profile_growth(n: &str, passes: usize) {
     let agg = common::one_mesh(Arc::new(common::mesh(nu, nv)));
     let cam = common::camera();
     let mut hits = 0;
+    let t0 = Instant::now();
     for _ in 0..passes.max(1) {
         hits = common::trace_all(&cam, &agg);
     }
+    let rays = common::RES * common::RES;
+    let ns = t0.elapsed().as_secs_f64() * 1e9 / (passes.max(1) * rays as usize) as f64;
     println!(
-        "growth-{n}: {} rays, {hits} hits",
-        common::RES * common::RES
+        "growth-{n}: {rays} rays, {hits} hits, {ns:.2} ns/ray over {} pass(es)",
+        passes.max(1)
     );
 }
 

@@ -95,7 +95,7 @@ impl Shape {
     /// [`Shape::intersect`] as the search for a closest hit needs it: a record that
     /// [`Shape::complete`] finishes once the search has a winner (a sphere leaves out its
     /// uv, which costs an `acos` and an `atan2`, for every candidate that loses).
-    #[inline]
+    #[inline(always)]
     fn candidate(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         match self {
             Shape::Sphere => shapes::sphere::intersect_bare(ray, t_min, t_max),
