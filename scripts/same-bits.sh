@@ -17,16 +17,8 @@ base="$(git rev-parse "${1:-HEAD}")"
 root="$PWD"
 target="${CARGO_TARGET_DIR:-$root/target}"
 work="$target/same-bits"
-mkdir -p "$work"
-if ! git -C "$work/src" rev-parse --git-dir >/dev/null 2>&1; then
-    rm -rf "$work/src"
-    git worktree prune
-    git worktree add --detach "$work/src" "$base" >/dev/null
-fi
-git -C "$work/src" checkout -q --detach "$base"
-echo "building the base ($base) and the working tree" >&2
-(cd "$work/src" && CARGO_TARGET_DIR="$work/target" cargo build -q --release -p renderer)
-cargo build -q --release -p renderer
+. scripts/base-build.sh
+base_build "$work" "$base"
 old="$work/target/release/renderer"
 new="$target/release/renderer"
 rm -rf "$work/old" "$work/new"
