@@ -856,6 +856,18 @@ impl Walk {
             unsafe { stack.set_len(base + k - 1) };
             return next;
         }
+        Walk::push_by_sort(stack, n, mask, key, near)
+    }
+
+    /// [`Walk::push_sorted`] by an insertion sort ([`sorted_lanes`]).
+    #[inline(always)]
+    fn push_by_sort<const N: usize, const W: usize>(
+        stack: &mut ArrayVec<Entry, N>,
+        n: &Node<W>,
+        mask: u32,
+        key: &[Real; W],
+        near: &[Real; W],
+    ) -> usize {
         let (lanes, k) = sorted_lanes(mask, key);
         for &lane in lanes[1..k].iter().rev() {
             Walk::push(stack, n, lane, near[lane]);
@@ -951,11 +963,7 @@ impl Walk {
                     a
                 } else if any {
                     // (The ranks of `Walk::push_sorted` made this search slower.)
-                    let (lanes, k) = sorted_lanes(mask, key);
-                    for &lane in lanes[1..k].iter().rev() {
-                        Walk::push(stack, n, lane, near[lane]);
-                    }
-                    lanes[0]
+                    Walk::push_by_sort(stack, n, mask, key, &near)
                 } else {
                     Walk::push_sorted(stack, n, mask, key, &near)
                 };
