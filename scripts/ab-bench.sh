@@ -28,11 +28,14 @@ while [ $# -gt 0 ]; do
     esac
     shift
 done
+for part in ${only//,/ }; do
+    case "$part" in mesh|physical) ;; *) echo "ab-bench.sh: --only takes mesh and physical, not '$part'" >&2; exit 2;; esac
+done
 case "$pairs" in ''|*[!0-9]*|0) echo "ab-bench.sh: --pairs takes a count of at least 1, not '$pairs'" >&2; exit 2;; esac
 base="$(git rev-parse --verify -q "$base_ref^{commit}")" ||
     { echo "ab-bench.sh: '$base_ref' names no commit" >&2; exit 2; }
 root="$PWD"
-target="${CARGO_TARGET_DIR:-$root/target}"
+target="$(realpath -m "${CARGO_TARGET_DIR:-$root/target}")"
 work="$target/ab"
 . scripts/base-build.sh
 base_build "$work" "$base"
@@ -49,6 +52,10 @@ for line in sys.stdin:
 }
 base_peers="$(peers_bin "$work/src" "$work/target")"
 new_peers="$(peers_bin "$root" "$target")"
+if [ -z "$base_peers" ] || [ -z "$new_peers" ]; then
+    echo "ab-bench.sh: no peers bench executable came out of the build (base: '$base_peers', new: '$new_peers')" >&2
+    exit 1
+fi
 python3 scripts/ab_bench.py "$work" --pairs "$pairs" --only "$only" \
     --base "$work/target/release/renderer" "$base_peers" \
     --new "$target/release/renderer" "$new_peers" --base-name "$(git rev-parse --short "$base")"

@@ -18,6 +18,7 @@ import statistics
 import subprocess
 import sys
 
+sys.dont_write_bytecode = True  # importing bench_peers must leave no __pycache__ in scripts/
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from bench_peers import MI_SCENES, ROOT, run_timed, spread  # noqa: E402
 
@@ -48,13 +49,18 @@ def mesh(outdir, bins, pairs):
             out = subprocess.run([bins[side][1], "mesh", d, "--quick"], capture_output=True,
                                  text=True, check=True).stdout
             runs[side].append(json.loads(out.strip().splitlines()[-1]))
+    # Rows by set name and thread count, so a base whose bench lists its sets otherwise
+    # still lines up; a row only one side has is left out.
+    def figures(run):
+        return {(s["name"], r["threads"], q): r[q + "_mrays"]
+                for s in run["sets"] for r in s["runs"] for q in ("closest", "any")}
+    base, new = [list(map(figures, runs[side])) for side in ("base", "new")]
     series = []
-    for i, s in enumerate(runs["base"][0]["sets"]):
-        for t, r in enumerate(s["runs"]):
-            for q in ("closest", "any"):
-                pick = lambda run: run["sets"][i]["runs"][t][q + "_mrays"]
-                series.append((f"{s['name']}: {q} hit, {r['threads']} thread(s)",
-                               [pick(x) for x in runs["base"]], [pick(x) for x in runs["new"]]))
+    for key in base[0]:
+        if all(key in n for n in new):
+            name, threads, q = key
+            series.append((f"{name}: {q} hit, {threads} thread(s)", [b[key] for b in base],
+                           [n[key] for n in new]))
     build = [("BVH build, 1M triangles (s)", [x["build_seconds"] for x in runs["base"]],
               [x["build_seconds"] for x in runs["new"]])]
     return (rows("Mesh (peers mesh --quick, Mrays/s)", series, "Mrays/s", "above 1, new is faster")
@@ -64,7 +70,7 @@ def mesh(outdir, bins, pairs):
 def physical(outdir, bins, pairs):
     d = os.path.join(outdir, "physical")
     os.makedirs(d, exist_ok=True)
-    series, same = [], {}
+    series, same, seconds = [], {}, {}
     for name in MI_SCENES:
         text = open(os.path.join(ROOT, "conformance/scenes/mitsuba", name + ".toml")).read()
         text = re.sub(r"(?m)^width = \d+", "width = 128", text)
@@ -82,10 +88,11 @@ def physical(outdir, bins, pairs):
                 secs[side].append(float(re.search(r"spp, ([\d.]+) s ->", log).group(1)))
                 digest[side] = hashlib.sha256(open(img, "rb").read()).hexdigest()
         same[name] = digest["base"] == digest["new"]
+        seconds[name] = secs
         series.append((f"{name} ({'same bits' if same[name] else 'different bits'})",
                        secs["base"], secs["new"]))
     return rows("Physical scenes (128 x 128, 64 spp, sobol, one thread, render seconds)", series,
-                "seconds", "below 1, new is faster"), {"same_bits": same}
+                "seconds", "below 1, new is faster"), {"same_bits": same, "seconds": seconds}
 
 
 def main():

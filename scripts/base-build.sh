@@ -9,7 +9,10 @@
 base_build() {
     local work="$1" base="$2"
     mkdir -p "$work"
-    if ! git -C "$work/src" rev-parse --git-dir >/dev/null 2>&1; then
+    # A worktree of its own: a folder without one would let git find the enclosing
+    # checkout (the target directory is usually inside it) and check the base out there.
+    if [ ! -e "$work/src/.git" ] ||
+        [ "$(git -C "$work/src" rev-parse --show-toplevel 2>/dev/null)" != "$(realpath "$work/src")" ]; then
         rm -rf "$work/src"
         git worktree prune
         git worktree add --detach "$work/src" "$base" >/dev/null

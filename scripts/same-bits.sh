@@ -15,7 +15,7 @@ cd "$(dirname "$0")/.."
 case "${1:-}" in -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0;; esac
 base="$(git rev-parse "${1:-HEAD}")"
 root="$PWD"
-target="${CARGO_TARGET_DIR:-$root/target}"
+target="$(realpath -m "${CARGO_TARGET_DIR:-$root/target}")"
 work="$target/same-bits"
 . scripts/base-build.sh
 base_build "$work" "$base"

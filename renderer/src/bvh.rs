@@ -687,24 +687,25 @@ struct Walk {
 /// Each lane's rank among the lanes of `mask` ordered by ascending key, ties in lane
 /// order (what [`sorted_lanes`] computes, as positions): lane `i`'s rank counts the lanes
 /// `j` of `mask` with `key[j] < key[i]`, or `key[j] == key[i]` and `j < i`; and the mask
-/// of lanes of rank 0. Lanes outside `mask` take NaN keys, which no comparison counts
-/// (their own ranks are meaningless). Eight broadcasts and compares, with no branch.
+/// of lanes of rank 0; and the mask of lanes whose key is NaN. Lanes outside `mask` take
+/// NaN keys, which no comparison counts (their own ranks are meaningless). When no key
+/// of `mask` is NaN, its lanes' ranks are `0..k` for its `k` lanes, one each: by key,
+/// then by lane, is a strict total order on them. Eight broadcasts of a key and three
+/// compares each, with no branch.
 ///
 /// # Safety
 /// `key` must be valid for reading 8 `f32`, and AVX2 available.
 #[cfg(all(target_arch = "x86_64", not(feature = "f64"), target_feature = "avx2"))]
 #[inline(always)]
-unsafe fn ranks8(key: *const f32, mask: u32) -> ([u32; 8], u32) {
+unsafe fn ranks8(key: *const f32, mask: u32) -> ([u32; 8], u32, u32) {
     use std::arch::x86_64::*;
     // SAFETY: as the function's contract says.
     unsafe {
         let bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
         let active = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(mask as i32), bit), bit);
-        let k = _mm256_blendv_ps(
-            _mm256_set1_ps(f32::NAN),
-            _mm256_loadu_ps(key),
-            _mm256_castsi256_ps(active),
-        );
+        let given = _mm256_loadu_ps(key);
+        let nan = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_UNORD_Q>(given, given)) as u32;
+        let k = _mm256_blendv_ps(_mm256_set1_ps(f32::NAN), given, _mm256_castsi256_ps(active));
         let lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
         let mut rank = _mm256_setzero_si256();
         for j in 0..8 {
@@ -722,7 +723,7 @@ unsafe fn ranks8(key: *const f32, mask: u32) -> ([u32; 8], u32) {
         ))) as u32;
         let mut out = [0u32; 8];
         _mm256_storeu_si256(out.as_mut_ptr().cast(), rank);
-        (out, first)
+        (out, first, nan)
     }
 }
 
@@ -826,7 +827,10 @@ impl Walk {
         if W == 8 {
             // SAFETY: `key` holds `W` = 8 `f32` (`Real` is `f32` here); AVX2 is enabled
             // at compile time.
-            let (rank, firsts) = unsafe { ranks8(key.as_ptr().cast(), mask) };
+            let (rank, firsts, nan) = unsafe { ranks8(key.as_ptr().cast(), mask) };
+            // An overlapped lane's entry distance is never NaN (`Node::hit`); the slots
+            // below rely on it, so it is checked here, not assumed.
+            assert!(nan & mask == 0, "a NaN key among the lanes to order");
             let next = (firsts & mask).trailing_zeros() as usize;
             let k = mask.count_ones() as usize;
             let base = stack.len();
@@ -837,12 +841,13 @@ impl Walk {
             while m != 0 {
                 let lane = m.trailing_zeros() as usize;
                 m &= m - 1;
-                // The ranks of the lanes of `mask` are 0..k, one each (no key is NaN), and
-                // `next` has rank 0: the others land on `base..base + k − 1`, each once,
-                // the farthest at the bottom.
+                // The ranks of the lanes of `mask` are 0..k, one each (no key is NaN,
+                // asserted above), and `next` has rank 0: the others land on
+                // `base..base + k − 1`, each once, the farthest at the bottom.
                 let slot = base + k - 1 - rank[lane] as usize;
                 debug_assert!((base..base + k - 1).contains(&slot));
-                // SAFETY: `slot < base + k − 1 ≤ N`, the stack's capacity (checked above).
+                // SAFETY: `base ≤ slot < base + k − 1 ≤ N`, the stack's capacity (both
+                // checked above: the bound, and the keys that make the ranks 0..k).
                 unsafe {
                     slots.add(slot).write(Entry {
                         child: n.child[lane],
@@ -1231,52 +1236,81 @@ mod tests {
     }
 
     /// `Walk::push_sorted` (by ranks on an AVX2 build) takes and stacks the lanes in the
-    /// insertion sort's order: on every mask of two or more of 8 lanes, with keys drawn
-    /// from a few values (ties in every pattern, −∞ among them), the next lane, the
-    /// stacked lanes and their entry distances are the same.
+    /// insertion sort's order: on every mask of two or more of 8 lanes, 80 draws each of
+    /// keys from a few values (ties in every pattern, ±∞ among them; NaN in lanes outside
+    /// the mask, which must not count), the next lane and the stacked lanes, with their
+    /// children, counts and entry distances, are the same.
     #[test]
     fn pushed_lanes_pop_in_the_sorted_order() {
-        let values = [Real::NEG_INFINITY, 0.0, 0.5, 0.5000001, 1.0, 7.0];
+        let values = [
+            Real::NEG_INFINITY,
+            0.0,
+            0.5,
+            0.5000001,
+            1.0,
+            7.0,
+            Real::INFINITY,
+        ];
         let mut node = Node::<8>::EMPTY;
-        for (k, c) in node.child.iter_mut().enumerate() {
-            *c = 100 + k as u32;
+        for k in 0..8 {
+            node.child[k] = 100 + k as u32;
+            node.count[k] = k as u8;
         }
         let mut ties = 0;
-        for case in 0..20_000u64 {
-            let mask = (u(case, 0) * 256.0) as u32 & 0xff;
-            if mask.count_ones() < 2 {
-                continue;
+        for mask in (0u32..256).filter(|m| m.count_ones() >= 2) {
+            for draw in 0..80u64 {
+                let case = u64::from(mask) * 80 + draw;
+                let key: [Real; 8] = std::array::from_fn(|k| {
+                    if mask & (1 << k) == 0 && draw % 2 == 1 {
+                        Real::NAN
+                    } else {
+                        values[(u(case, 1 + k as u64) * values.len() as Real) as usize]
+                    }
+                });
+                let near: [Real; 8] = std::array::from_fn(|k| k as Real + u(case, 20 + k as u64));
+                let mut stack = ArrayVec::<Entry, 16>::new();
+                stack.push(Entry {
+                    child: 1,
+                    count: 0,
+                    near: -1.0,
+                });
+                let next = Walk::push_sorted(&mut stack, &node, mask, &key, &near);
+                let (lanes, k) = sorted_lanes(mask, &key);
+                assert_eq!(
+                    next, lanes[0],
+                    "mask {mask:#010b}, keys {key:?}: the first lane"
+                );
+                let popped: Vec<(u32, u8, Real)> = stack
+                    .iter()
+                    .rev()
+                    .map(|e| (e.child, e.count, e.near))
+                    .collect();
+                let sorted: Vec<(u32, u8, Real)> = lanes[1..k]
+                    .iter()
+                    .map(|&l| (100 + l as u32, l as u8, near[l]))
+                    .chain([(1, 0, -1.0)])
+                    .collect();
+                assert_eq!(
+                    popped, sorted,
+                    "mask {mask:#010b}, keys {key:?}: Walk::push_sorted stacks the lanes out \
+                     of the insertion sort's order (bvh::ranks8)"
+                );
+                ties += (1..k).any(|i| key[lanes[i]] == key[lanes[i - 1]]) as usize;
             }
-            let key: [Real; 8] = std::array::from_fn(|k| {
-                values[(u(case, 1 + k as u64) * values.len() as Real) as usize]
-            });
-            let near: [Real; 8] = std::array::from_fn(|k| k as Real + u(case, 20 + k as u64));
-            let mut stack = ArrayVec::<Entry, 16>::new();
-            stack.push(Entry {
-                child: 1,
-                count: 0,
-                near: -1.0,
-            });
-            let next = Walk::push_sorted(&mut stack, &node, mask, &key, &near);
-            let (lanes, k) = sorted_lanes(mask, &key);
-            assert_eq!(
-                next, lanes[0],
-                "case {case}: mask {mask:#010b}, keys {key:?}: the first lane"
-            );
-            let popped: Vec<(u32, Real)> = stack.iter().rev().map(|e| (e.child, e.near)).collect();
-            let sorted: Vec<(u32, Real)> = lanes[1..k]
-                .iter()
-                .map(|&l| (100 + l as u32, near[l]))
-                .chain([(1, -1.0)])
-                .collect();
-            assert_eq!(
-                popped, sorted,
-                "case {case}: mask {mask:#010b}, keys {key:?}: Walk::push_sorted stacks the \
-                 lanes out of the insertion sort's order (bvh::ranks8)"
-            );
-            ties += (1..k).any(|i| key[lanes[i]] == key[lanes[i - 1]]) as usize;
         }
-        assert!(ties > 1000, "the cases must include ties: {ties}");
+        assert!(ties > 5000, "the cases must include ties: {ties}");
+    }
+
+    /// A NaN key among the lanes to order (which `Node::hit` never gives an overlapped
+    /// lane) stops `Walk::push_sorted` before it writes the stack: on the AVX2 build its
+    /// slots rely on the keys being ordered.
+    #[cfg(all(target_arch = "x86_64", not(feature = "f64"), target_feature = "avx2"))]
+    #[test]
+    #[should_panic(expected = "a NaN key among the lanes to order")]
+    fn a_nan_key_stops_push_sorted() {
+        let key = [0.5, Real::NAN, 0.25, 1.0, 0.0, 0.0, 0.0, 0.0];
+        let mut stack = ArrayVec::<Entry, 16>::new();
+        Walk::push_sorted(&mut stack, &Node::<8>::EMPTY, 0b1111, &key, &key);
     }
 
     /// The node test in SIMD lanes (SSE at 4, AVX at 8) gives the bits of the lane loop,
