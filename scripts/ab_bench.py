@@ -20,7 +20,7 @@ import sys
 
 sys.dont_write_bytecode = True  # importing bench_peers must leave no __pycache__ in scripts/
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from bench_peers import MI_SCENES, ROOT, run_timed, spread  # noqa: E402
+from bench_peers import MI_SCENES, mitsuba_scene, run_timed, spread, with_sampler  # noqa: E402
 
 
 def order(k):
@@ -72,10 +72,7 @@ def physical(outdir, bins, pairs):
     os.makedirs(d, exist_ok=True)
     series, same, seconds = [], {}, {}
     for name in MI_SCENES:
-        text = open(os.path.join(ROOT, "conformance/scenes/mitsuba", name + ".toml")).read()
-        text = re.sub(r"(?m)^width = \d+", "width = 128", text)
-        text = re.sub(r"(?m)^height = \d+", "height = 128", text)
-        text = re.sub(r"(?m)^\[render\]$", '[render]\nsampler = "sobol"', text, count=1)
+        text = with_sampler(mitsuba_scene(name, 128), "sobol")
         scene = os.path.join(d, name + ".toml")
         open(scene, "w").write(text)
         secs = {"base": [], "new": []}

@@ -240,6 +240,18 @@ def crossing(pts, target):
     return spp * (e / target) ** 2
 
 
+def mitsuba_scene(name, size):
+    """Catalog scene NAME of conformance/scenes/mitsuba as text, at size x size pixels."""
+    text = open(os.path.join(ROOT, "conformance/scenes/mitsuba", name + ".toml")).read()
+    text = re.sub(r"(?m)^width = \d+", f"width = {size}", text)
+    return re.sub(r"(?m)^height = \d+", f"height = {size}", text)
+
+
+def with_sampler(text, sampler):
+    """A scene's text with our `sampler` set in its [render] table."""
+    return re.sub(r"(?m)^\[render\]$", f'[render]\nsampler = "{sampler}"', text, count=1)
+
+
 def mitsuba(outdir, quick):
     import numpy as np
     import mitsuba as mi
@@ -268,9 +280,7 @@ def mitsuba(outdir, quick):
           "|---|---:|---:|---|---:|---:|---|---:|---:|---:|"]
     rows = []
     for name in MI_SCENES:
-        text = open(os.path.join(ROOT, "conformance/scenes/mitsuba", name + ".toml")).read()
-        text = re.sub(r"(?m)^width = \d+", f"width = {size}", text)
-        text = re.sub(r"(?m)^height = \d+", f"height = {size}", text)
+        text = mitsuba_scene(name, size)
         toml = os.path.join(d, name + ".toml")
         open(toml, "w").write(text)
         xml = os.path.join(d, name + ".xml")
@@ -295,7 +305,7 @@ def mitsuba(outdir, quick):
             # Render time as the CLI reports it (scene loading and the file write excluded,
             # as for Mitsuba, whose mi.render is timed alone).
             st = os.path.join(d, f"{name}_ours_{sampler}.toml")
-            open(st, "w").write(re.sub(r"(?m)^\[render\]$", f'[render]\nsampler = "{sampler}"', text, count=1))
+            open(st, "w").write(with_sampler(text, sampler))
             out = os.path.join(d, f"{name}_ours_{sampler}_{spp}.exr")
             _, _, log = run_timed([RENDERER, "render", st, "-o", out, "--spp", str(spp), "--threads", "2"])
             secs = float(re.search(r"spp, ([\d.]+) s ->", log).group(1))
