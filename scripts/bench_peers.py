@@ -213,7 +213,9 @@ MI_SCENES = ["mi_area_soft_shadow", "mi_mirror_sphere", "mi_glass_sphere", "mi_c
 MI_SAMPLERS = ["independent", "stratified", "multijitter", "ldsampler"]
 # The reference's sampler: stratified, so that its own noise is far below the errors it measures.
 REF_SAMPLER = "multijitter"
-OURS_SAMPLERS = ["independent", "stratified", "sobol"]
+# "X adaptive": sampler X with render.adaptive (renderer/docs/physical.md), whose counts are
+# the averages the pixels took.
+OURS_SAMPLERS = ["independent", "stratified", "sobol", "stratified adaptive", "sobol adaptive"]
 
 
 def crossing(pts, target):
@@ -248,8 +250,11 @@ def mitsuba_scene(name, size):
 
 
 def with_sampler(text, sampler):
-    """A scene's text with our `sampler` set in its [render] table."""
-    return re.sub(r"(?m)^\[render\]$", f'[render]\nsampler = "{sampler}"', text, count=1)
+    """A scene's text with our `sampler` set in its [render] table ("X adaptive": sampler X
+    with adaptive sampling on)."""
+    name, _, adaptive = sampler.partition(" ")
+    extra = "\nadaptive = true" if adaptive == "adaptive" else ""
+    return re.sub(r"(?m)^\[render\]$", f'[render]\nsampler = "{name}"{extra}', text, count=1)
 
 
 def mitsuba(outdir, quick):
@@ -274,10 +279,12 @@ def mitsuba(outdir, quick):
           f"sampler renders at {', '.join(map(str, ladder))} spp (the counts each really takes); the count where its error reaches the target is interpolated "
           f"between the two around it (log-log), and its time is that count at the time per sample of its {top}-spp "
           "render. Mitsuba's best sampler for the scene is the one that gets there first, and so is ours "
-          "(independent, stratified, sobol). Ratio = ours / best Mitsuba (below 1: we are faster).", "",
+          "(independent, stratified, sobol, and stratified and sobol with adaptive sampling, whose counts are the "
+          "averages the pixels took). Ratio = ours / best Mitsuba (below 1: we are faster); the last two columns are "
+          "our best without adaptive sampling and its ratio.", "",
           "| scene | ours Msamples/s | Mitsuba Msamples/s | our best sampler | its spp to target | its time (s) "
-          "| best Mitsuba sampler | its spp | its time (s) | ratio |",
-          "|---|---:|---:|---|---:|---:|---|---:|---:|---:|"]
+          "| best Mitsuba sampler | its spp | its time (s) | ratio | our best, not adaptive | its ratio |",
+          "|---|---:|---:|---|---:|---:|---|---:|---:|---:|---|---:|"]
     rows = []
     for name in MI_SCENES:
         text = mitsuba_scene(name, size)
@@ -299,34 +306,37 @@ def mitsuba(outdir, quick):
             scene = mi.load_file(p)
             t0 = time.perf_counter()
             img = np.array(mi.render(scene, spp=spp, seed=seed), dtype=np.float64)
-            return time.perf_counter() - t0, img
+            return time.perf_counter() - t0, img, mi_count(sampler, spp)
 
         def ours_render(sampler, spp):
             # Render time as the CLI reports it (scene loading and the file write excluded,
             # as for Mitsuba, whose mi.render is timed alone).
-            st = os.path.join(d, f"{name}_ours_{sampler}.toml")
+            # With adaptive sampling the count is the average the pixels took (the log's).
+            tag = sampler.replace(" ", "_")
+            st = os.path.join(d, f"{name}_ours_{tag}.toml")
             open(st, "w").write(with_sampler(text, sampler))
-            out = os.path.join(d, f"{name}_ours_{sampler}_{spp}.exr")
+            out = os.path.join(d, f"{name}_ours_{tag}_{spp}.exr")
             _, _, log = run_timed([RENDERER, "render", st, "-o", out, "--spp", str(spp), "--threads", "2"])
-            secs = float(re.search(r"spp, ([\d.]+) s ->", log).group(1))
+            m = re.search(r"([\d.]+) spp, ([\d.]+) s ->", log)
             img = np.array(mi.Bitmap(out), dtype=np.float64)[:, :, :3]
-            return max(secs, 1e-4), img
+            return max(float(m.group(2)), 1e-4), img, float(m.group(1))
 
         # The reference: two independent renders, whose difference measures their own
         # noise (each pixel's error variance of the mean is a quarter of E[(r1 - r2)^2]).
-        _, r1 = mi_render(REF_SAMPLER, ref_spp, seed=7)
-        _, r2 = mi_render(REF_SAMPLER, ref_spp, seed=8)
+        _, r1, _ = mi_render(REF_SAMPLER, ref_spp, seed=7)
+        _, r2, _ = mi_render(REF_SAMPLER, ref_spp, seed=8)
         ref = (r1[:, :, :3] + r2[:, :, :3]) / 2
         floor2 = float(np.mean((r1[:, :, :3] - r2[:, :, :3]) ** 2)) / 4
         # An image's own error: its mean squared difference to the reference, less the
         # reference's own part (independent of the image's, so their squares add).
         own = lambda img: math.sqrt(max(float(np.mean((img[:, :, :3] - ref) ** 2)) - floor2, 0.0))
 
-        def ladder_of(render, count=lambda spp: spp):
+        def ladder_of(render):
+            # Each point at the count the render really took.
             pts = []
             for spp in ladder:
-                t, img = render(spp)
-                pts.append((count(spp), t, own(img)))
+                t, img, n = render(spp)
+                pts.append((n, t, own(img)))
             return pts
 
         # Ours and Mitsuba alternate sampler by sampler, so a slow phase of the machine
@@ -338,7 +348,7 @@ def mitsuba(outdir, quick):
                 ours_pts[s] = ladder_of(lambda spp, s=s: ours_render(s, spp))
             if k < len(MI_SAMPLERS):
                 s = MI_SAMPLERS[k]
-                mi_pts[s] = ladder_of(lambda spp, s=s: mi_render(s, spp), lambda spp, s=s: mi_count(s, spp))
+                mi_pts[s] = ladder_of(lambda spp, s=s: mi_render(s, spp))
         target = mi_pts["independent"][-1][2]
 
         def time_to(pts):
@@ -349,6 +359,10 @@ def mitsuba(outdir, quick):
         ours_spp, ours_t = time_to(ours_pts[ours_best])
         best = min(MI_SAMPLERS, key=lambda s: time_to(mi_pts[s])[1])
         best_spp, best_t = time_to(mi_pts[best])
+        # The same without adaptive sampling: a fixed count in every pixel, as Mitsuba's.
+        plain = [s for s in OURS_SAMPLERS if not s.endswith(" adaptive")]
+        plain_best = min(plain, key=lambda s: time_to(ours_pts[s])[1])
+        plain_t = time_to(ours_pts[plain_best])[1]
         px = size * size * top
         ours_rate = px / ours_pts["independent"][-1][1] / 1e6
         mi_rate = px / mi_pts["independent"][-1][1] / 1e6
@@ -356,10 +370,11 @@ def mitsuba(outdir, quick):
         errors.update({f"mitsuba {s}": [(n, e) for n, _, e in mi_pts[s]] for s in MI_SAMPLERS})
         rows.append({"scene": name, "ours_msps": ours_rate, "mitsuba_msps": mi_rate, "ours_sampler": ours_best,
                      "ours_spp": ours_spp, "ours_time": ours_t, "best_sampler": best, "best_spp": best_spp,
-                     "best_time": best_t, "ratio": ours_t / best_t, "target_rmse": target,
+                     "best_time": best_t, "ratio": ours_t / best_t, "plain_sampler": plain_best,
+                     "plain_time": plain_t, "plain_ratio": plain_t / best_t, "target_rmse": target,
                      "reference_rmse": math.sqrt(floor2), "own_rmse_by_spp": errors})
         md.append(f"| {name} | {ours_rate:.2f} | {mi_rate:.2f} | {ours_best} | {ours_spp:.1f} | {ours_t:.3f} | {best} | "
-                  f"{best_spp:.1f} | {best_t:.3f} | {ours_t / best_t:.2f} |")
+                  f"{best_spp:.1f} | {best_t:.3f} | {ours_t / best_t:.2f} | {plain_best} | {plain_t / best_t:.2f} |")
     return md, {"mitsuba": rows}
 
 

@@ -23,6 +23,7 @@ pub fn image_of(w: u32, h: u32, rgb: &[f32]) -> Image {
         aov: None,
         non_finite: 0,
         moments: None,
+        samples: 0,
     }
 }
 

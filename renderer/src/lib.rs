@@ -3,6 +3,7 @@
 //! See ARCHITECTURE.md at the repository root for the bird's-eye view and invariants.
 
 pub mod aabb;
+pub mod adaptive;
 pub mod aggregate;
 pub mod bvh;
 pub mod camera;

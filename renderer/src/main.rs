@@ -47,6 +47,10 @@ enum Cmd {
         /// as it would in the scene file.
         #[arg(long, value_name = "WxH", value_parser = parse_size)]
         size: Option<(u32, u32)>,
+        /// Adaptive sampling: spend the samples (an average of --spp or render.samples a
+        /// pixel) where the noise is, as render.adaptive = true does.
+        #[arg(long)]
+        adaptive: bool,
     },
 }
 
@@ -116,6 +120,7 @@ fn run() -> Result<()> {
             spawn,
             spp,
             size,
+            adaptive,
         } => {
             let ext = out
                 .extension()
@@ -128,7 +133,11 @@ fn run() -> Result<()> {
                 out.display()
             );
             anyhow::ensure!(!aov || ext == "exr", "--aov needs an .exr output");
-            let overrides = Overrides { size, samples: spp };
+            let overrides = Overrides {
+                size,
+                samples: spp,
+                adaptive,
+            };
             overrides.check().map_err(anyhow::Error::msg)?;
             let s = Scene::load_with(&scene, &overrides)?;
             let t0 = std::time::Instant::now();
@@ -159,12 +168,18 @@ Check the scene's numbers (renderer/docs/robustness.md)",
                 img.non_finite
             );
             output::write(&img, &out, map).with_context(|| format!("writing {}", out.display()))?;
+            // With adaptive sampling the count is the average the pixels took.
+            let spp = if s.settings.adaptive {
+                let px = (img.width as u64 * img.height as u64).max(1);
+                format!("adaptive, {:.3} spp", img.samples as f64 / px as f64)
+            } else {
+                format!("{} spp", s.settings.samples)
+            };
             eprintln!(
-                "{}: {}x{} px, {} spp, {:.3} s -> {}",
+                "{}: {}x{} px, {spp}, {:.3} s -> {}",
                 scene.display(),
                 img.width,
                 img.height,
-                s.settings.samples,
                 secs,
                 out.display()
             );

@@ -403,6 +403,7 @@ mod write_tests {
             .map(|k| ((k * 7919) % 1000) as f32 / 1000.0)
             .collect();
         Image {
+            samples: 0,
             width: w,
             height: h,
             rgb,

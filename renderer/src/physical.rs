@@ -106,6 +106,7 @@ impl Surface<'_> {
         (rgb(self.m.color) * (cos / PI), cos / PI)
     }
 
+    #[inline(always)]
     fn sample(&self, wo: glam::DVec3, s: &mut PixelSampler) -> Option<BsdfSample> {
         let side = if self.ns.dot(wo) >= 0.0 { 1.0 } else { -1.0 };
         let n = self.ns * side;
@@ -261,6 +262,7 @@ impl<'a> PhysicalIntegrator<'a> {
 
     /// Next-event estimation at a non-delta surface: every light once, area lights and the
     /// environment weighted by MIS against BSDF sampling.
+    #[inline(always)]
     fn direct_light(&self, s: &Surface, wo: glam::DVec3, smp: &mut PixelSampler) -> glam::DVec3 {
         let mut sum = glam::DVec3::ZERO;
         let p = dv(s.p);
@@ -328,6 +330,9 @@ impl<'a> PhysicalIntegrator<'a> {
     /// Path tracing with next-event estimation. `max_depth` counts path vertices after the
     /// camera, as Mitsuba does: 1 shows emitters only, 2 adds direct light; `direct` is this
     /// with `max_depth = 2`, where a delta lobe's sampled ray still sees emitters.
+    /// (Inlined into the render loop, its one caller there: out of line, a `direct` frame
+    /// takes 3 % more instructions.)
+    #[inline(always)]
     fn path(
         &self,
         ray: &Ray,

@@ -1,6 +1,7 @@
 //! The render loop: rows in parallel through rayon, each pixel independent, so the
 //! output is bit-identical for any thread count. Nothing here allocates per pixel.
 
+use crate::adaptive;
 use crate::hit::Hit;
 use crate::physical::PhysicalIntegrator;
 use crate::ray::Ray;
@@ -46,6 +47,9 @@ pub struct Image {
     /// E[RG], E[RB], E[GB] (6 per pixel). With the mean they give the variance of any linear
     /// function of RGB (for example XYZ), for statistical tests against references.
     pub moments: Option<Vec<f32>>,
+    /// Samples traced, over all pixels: width · height · spp, or with adaptive sampling
+    /// about that (adaptive.rs).
+    pub samples: u64,
 }
 
 /// Render options that are not part of the scene.
@@ -104,8 +108,23 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
     let mut physical = PhysicalIntegrator::new(scene, opts.spawn);
     physical.fault = opts.fault;
     let classic = scene.settings.integrator == Integrator::Classic;
-    let kind = scene.settings.sampler;
-    let bar = progress_bar(h as u64, opts.progress);
+    let tracer = RowTracer {
+        scene,
+        shader: &shader,
+        physical: &physical,
+        classic,
+        // The classic model samples the pixel centre at 1 spp, as POV-Ray does with
+        // antialiasing off (and needs no sampler).
+        centre: classic && spp == 1,
+        kind: scene.settings.sampler,
+        w,
+    };
+    let pilot = if scene.settings.adaptive {
+        adaptive::pilot(spp)
+    } else {
+        None
+    };
+    let bar = progress_bar(h as u64 * (1 + pilot.is_some() as u64), opts.progress);
     let mut rgb = vec![0f32; w * h * 3];
     let mut moments = opts.moments.then(|| vec![0f32; w * h * 6]);
     let mut aov = opts.aov.then(|| Aov {
@@ -119,100 +138,33 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
         Some(m) => m.chunks_mut(w * 6).collect(),
         None => (0..h).map(|_| -> &mut [f32] { &mut [] }).collect(),
     };
-    let non_finite: usize = rgb
-        .par_chunks_mut(w * 3)
-        .zip(moment_rows)
-        .enumerate()
-        .map(|(j, (row, mrow))| {
-            let mut bad = 0;
-            // The row's samples in order (pixel by pixel, sample by sample), in chunks:
-            // the classic model finds a chunk's camera hits together
-            // (Aggregate::intersect_many), then shades them one by one. Each pixel's
-            // sum runs over its samples in the same order as one at a time.
-            let mut rays = [Ray::new(Vec3::ZERO, Vec3::ONE); CHUNK];
-            let mut hits: [Option<Hit>; CHUNK] = [None; CHUNK];
-            let mut samplers: [Option<PixelSampler>; CHUNK] = std::array::from_fn(|_| None);
-            let mut sum = Color::ZERO;
-            let mut sq = [0f64; 6];
-            let total = w * spp as usize;
-            // Sample `q` of the row: (pixel column, sample index).
-            let pixel_sample = |q: usize| (q / spp as usize, (q % spp as usize) as u32);
-            for start in (0..total).step_by(CHUNK) {
-                let n = CHUNK.min(total - start);
-                for k in 0..n {
-                    let (i, s) = pixel_sample(start + k);
-                    // The classic model samples the pixel centre at 1 spp, as POV-Ray
-                    // does with antialiasing off (and needs no sampler); otherwise
-                    // positions are uniform in the pixel (a box filter, as Mitsuba's).
-                    let (dx, dy) = if classic && spp == 1 {
-                        (0.5, 0.5)
-                    } else {
-                        let mut smp = PixelSampler::new(kind, (j * w + i) as u64, s, spp);
-                        if classic {
-                            smp.next_2d()
-                        } else {
-                            // The physical model draws the rest of the sample from it. (Made
-                            // in its slot: a sampler advanced by the call and then copied
-                            // into the slot was read back in pieces of other widths than
-                            // the call wrote, which stalls store forwarding.)
-                            samplers[k].insert(smp).next_2d()
-                        }
-                    };
-                    rays[k] = scene.camera.ray_at(i as f64 + dx, j as f64 + dy);
-                }
-                if classic {
-                    scene.root.intersect_many_for_shading(
-                        &rays[..n],
-                        0.0,
-                        Real::INFINITY,
-                        &mut hits[..n],
+    let (non_finite, samples): (usize, u64) = match pilot {
+        None => (
+            rgb.par_chunks_mut(w * 3)
+                .zip(moment_rows)
+                .enumerate()
+                .map(|(j, (row, mrow))| {
+                    let mut bad = 0;
+                    let sq_wanted = !mrow.is_empty();
+                    tracer.trace_row(
+                        j,
+                        0,
+                        Counts::Every(spp),
+                        sq_wanted,
+                        &mut |i, n, sum, sq, _| {
+                            bad += write_pixel(row, mrow, i, n, sum, sq);
+                        },
                     );
-                }
-                for k in 0..n {
-                    let (i, s) = pixel_sample(start + k);
-                    let c = match (classic, &mut samplers[k]) {
-                        (false, Some(smp)) => physical.li(&rays[k], smp),
-                        _ => shader.trace_primary_hit(&rays[k], hits[k]),
-                    };
-                    sum += c;
-                    if !mrow.is_empty() {
-                        let (r, g, b) = (c.x as f64, c.y as f64, c.z as f64);
-                        for (m, v) in [r * r, g * g, b * b, r * g, r * b, g * b]
-                            .into_iter()
-                            .enumerate()
-                        {
-                            sq[m] += v;
-                        }
+                    if let Some(b) = &bar {
+                        b.inc(1);
                     }
-                    if s + 1 < spp {
-                        continue;
-                    }
-                    // The pixel's last sample: write it out.
-                    if !mrow.is_empty() {
-                        for m in 0..6 {
-                            let v = (sq[m] / spp as f64) as f32;
-                            mrow[6 * i + m] = if v.is_finite() { v } else { 0.0 };
-                        }
-                    }
-                    let c = sum / spp as f32;
-                    for m in 0..3 {
-                        let v = c[m];
-                        row[3 * i + m] = if v.is_finite() {
-                            v
-                        } else {
-                            bad += 1;
-                            0.0
-                        };
-                    }
-                    (sum, sq) = (Color::ZERO, [0.0; 6]);
-                }
-            }
-            if let Some(b) = &bar {
-                b.inc(1);
-            }
-            bad
-        })
-        .sum();
+                    bad
+                })
+                .sum(),
+            (w * h) as u64 * spp as u64,
+        ),
+        Some(pilot) => render_adaptive(&tracer, spp, pilot, &mut rgb, moment_rows, &bar),
+    };
     if let Some(a) = aov.as_mut() {
         fill_aov(scene, a, w);
     }
@@ -226,6 +178,251 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
         aov,
         non_finite,
         moments,
+        samples,
+    }
+}
+
+/// Writes pixel `i`'s mean of `n` samples (their `sum`, and their products' sums `sq` when
+/// the moments row is not empty) into its row; returns how many channels came out
+/// non-finite (written as 0).
+fn write_pixel(
+    row: &mut [f32],
+    mrow: &mut [f32],
+    i: usize,
+    n: u32,
+    sum: Color,
+    sq: &[f64; 6],
+) -> usize {
+    let mut bad = 0;
+    if !mrow.is_empty() {
+        for m in 0..6 {
+            let v = (sq[m] / n as f64) as f32;
+            mrow[6 * i + m] = if v.is_finite() { v } else { 0.0 };
+        }
+    }
+    let c = sum / n as f32;
+    for m in 0..3 {
+        let v = c[m];
+        row[3 * i + m] = if v.is_finite() {
+            v
+        } else {
+            bad += 1;
+            0.0
+        };
+    }
+    bad
+}
+
+/// Adaptive sampling (adaptive.rs): `pilot` samples in every pixel, then the rest of the
+/// budget of `spp` a pixel where the neighbours' pilots were noisy. Each pixel's value is
+/// the mean of all its samples. Returns the non-finite channels and the samples traced.
+fn render_adaptive(
+    t: &RowTracer,
+    spp: u32,
+    pilot: u32,
+    rgb: &mut [f32],
+    moment_rows: Vec<&mut [f32]>,
+    bar: &Option<indicatif::ProgressBar>,
+) -> (usize, u64) {
+    let w = t.w;
+    let h = rgb.len() / (3 * w.max(1));
+    // The pilot: each pixel's sum and its products' sums (for its variance).
+    let mut sums = vec![(Color::ZERO, [0f64; 6], 0u64); w * h];
+    sums.par_chunks_mut(w).enumerate().for_each(|(j, row)| {
+        t.trace_row(j, 0, Counts::Every(pilot), true, &mut |i, _, sum, sq, d| {
+            row[i] = (sum, *sq, d)
+        });
+        if let Some(b) = bar {
+            b.inc(1);
+        }
+    });
+    let variance: Vec<f64> = sums
+        .iter()
+        .map(|(sum, sq, _)| adaptive::variance(*sum, sq, pilot))
+        .collect();
+    let cost: Vec<f64> = sums
+        .iter()
+        .map(|(.., d)| adaptive::cost(*d, pilot))
+        .collect();
+    let extra = adaptive::extra_counts(w, h, &variance, &cost, spp - pilot);
+    // The rest, from a second stream of sample numbers (pixel indices offset by w·h), so
+    // the extra samples are independent of the pilot's.
+    let stream = (w * h) as u64;
+    let samples = (w * h) as u64 * pilot as u64 + extra.iter().map(|&k| k as u64).sum::<u64>();
+    let bad = rgb
+        .par_chunks_mut(w * 3)
+        .zip(moment_rows)
+        .zip(sums.par_chunks(w))
+        .enumerate()
+        .map(|(j, ((row, mrow), first))| {
+            let counts = &extra[j * w..(j + 1) * w];
+            let mut bad = 0;
+            let mut i_next = 0;
+            let sq_wanted = !mrow.is_empty();
+            let finish =
+                |row: &mut [f32], mrow: &mut [f32], i: usize, k: u32, sum: Color, sq: &[f64; 6]| {
+                    let (s1, q1, _) = &first[i];
+                    let mut q = *q1;
+                    for m in 0..6 {
+                        q[m] += sq[m];
+                    }
+                    write_pixel(row, mrow, i, pilot + k, *s1 + sum, &q)
+                };
+            t.trace_row(
+                j,
+                stream,
+                Counts::Each(counts),
+                sq_wanted,
+                &mut |i, k, sum, sq, _| {
+                    // Pixels with no extra samples keep their pilot's mean.
+                    while i_next < i {
+                        bad += finish(row, mrow, i_next, 0, Color::ZERO, &[0.0; 6]);
+                        i_next += 1;
+                    }
+                    bad += finish(row, mrow, i, k, sum, sq);
+                    i_next = i + 1;
+                },
+            );
+            while i_next < w {
+                bad += finish(row, mrow, i_next, 0, Color::ZERO, &[0.0; 6]);
+                i_next += 1;
+            }
+            if let Some(b) = bar {
+                b.inc(1);
+            }
+            bad
+        })
+        .sum();
+    (bad, samples)
+}
+
+/// The samples of each pixel of a row: the same count in every pixel, or one each. (One
+/// type, not a closure, so that the row loop is compiled once and the integrator inlined
+/// into it, as when every render had one count.)
+#[derive(Clone, Copy)]
+enum Counts<'a> {
+    Every(u32),
+    Each(&'a [u32]),
+}
+
+/// What a row hands each finished pixel: (column, count, colour sum, products' sums,
+/// sampler dimensions drawn).
+type PixelDone<'a> = dyn FnMut(usize, u32, Color, &[f64; 6], u64) + 'a;
+
+/// What tracing a row of pixels needs.
+struct RowTracer<'a> {
+    scene: &'a Scene,
+    shader: &'a Shader<'a>,
+    physical: &'a PhysicalIntegrator<'a>,
+    classic: bool,
+    /// One sample at the pixel centre (the classic model at 1 spp).
+    centre: bool,
+    kind: crate::sampler::SamplerKind,
+    w: usize,
+}
+
+impl RowTracer<'_> {
+    /// Traces `count(i)` samples in each pixel `i` of row `j` (pixel by pixel, sample by
+    /// sample), with the samplers of pixel numbers `stream + j·w + i`, and hands each
+    /// pixel that has samples to `done(i, count, sum, products, dimensions)`: the sum of
+    /// its colours, when `sq_wanted` the sum of their products R², G², B², RG, RB, GB
+    /// (else zeros), and the sampler dimensions its samples used (a measure of their
+    /// paths' length, 0 for the classic model).
+    fn trace_row(
+        &self,
+        j: usize,
+        stream: u64,
+        count: Counts,
+        sq_wanted: bool,
+        done: &mut PixelDone,
+    ) {
+        let count = |i: usize| match count {
+            Counts::Every(n) => n,
+            Counts::Each(c) => c[i],
+        };
+        let (scene, w) = (self.scene, self.w);
+        // The row's samples in order, in chunks: the classic model finds a chunk's camera
+        // hits together (Aggregate::intersect_many), then shades them one by one. Each
+        // pixel's sum runs over its samples in the same order as one at a time.
+        let mut rays = [Ray::new(Vec3::ZERO, Vec3::ONE); CHUNK];
+        let mut hits: [Option<Hit>; CHUNK] = [None; CHUNK];
+        let mut samplers: [Option<PixelSampler>; CHUNK] = std::array::from_fn(|_| None);
+        let mut ids = [(0u32, 0u32, 0u32); CHUNK];
+        let mut sum = Color::ZERO;
+        let mut sq = [0f64; 6];
+        let mut dims = 0u64;
+        // The next sample to place: (pixel column, sample index, the pixel's count).
+        let (mut i, mut s) = (0usize, 0u32);
+        let mut n_i = if w > 0 { count(0) } else { 0 };
+        loop {
+            // Fill a chunk.
+            let mut n = 0;
+            while n < CHUNK {
+                while i < w && s >= n_i {
+                    i += 1;
+                    s = 0;
+                    n_i = if i < w { count(i) } else { 0 };
+                }
+                if i >= w {
+                    break;
+                }
+                ids[n] = (i as u32, s, n_i);
+                let (dx, dy) = if self.centre {
+                    (0.5, 0.5)
+                } else {
+                    let mut smp = PixelSampler::new(self.kind, stream + (j * w + i) as u64, s, n_i);
+                    if self.classic {
+                        smp.next_2d()
+                    } else {
+                        // The physical model draws the rest of the sample from it. (Made
+                        // in its slot: a sampler advanced by the call and then copied
+                        // into the slot was read back in pieces of other widths than
+                        // the call wrote, which stalls store forwarding.)
+                        samplers[n].insert(smp).next_2d()
+                    }
+                };
+                rays[n] = scene.camera.ray_at(i as f64 + dx, j as f64 + dy);
+                s += 1;
+                n += 1;
+            }
+            if n == 0 {
+                return;
+            }
+            if self.classic {
+                scene.root.intersect_many_for_shading(
+                    &rays[..n],
+                    0.0,
+                    Real::INFINITY,
+                    &mut hits[..n],
+                );
+            }
+            for k in 0..n {
+                let (pi, ps, pn) = ids[k];
+                let c = match (self.classic, &mut samplers[k]) {
+                    (false, Some(smp)) => {
+                        let c = self.physical.li(&rays[k], smp);
+                        dims += u64::from(smp.dimensions());
+                        c
+                    }
+                    _ => self.shader.trace_primary_hit(&rays[k], hits[k]),
+                };
+                sum += c;
+                if sq_wanted {
+                    let (r, g, b) = (c.x as f64, c.y as f64, c.z as f64);
+                    for (m, v) in [r * r, g * g, b * b, r * g, r * b, g * b]
+                        .into_iter()
+                        .enumerate()
+                    {
+                        sq[m] += v;
+                    }
+                }
+                if ps + 1 == pn {
+                    // The pixel's last sample.
+                    done(pi as usize, pn, sum, &sq, dims);
+                    (sum, sq, dims) = (Color::ZERO, [0.0; 6], 0);
+                }
+            }
+        }
     }
 }
 

@@ -363,6 +363,11 @@ impl PixelSampler {
         }
     }
 
+    /// The dimensions drawn so far.
+    pub fn dimensions(&self) -> u32 {
+        self.dim
+    }
+
     /// The next number in [0, 1).
     pub fn next_1d(&mut self) -> f64 {
         let d = self.dim;

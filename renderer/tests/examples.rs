@@ -190,6 +190,7 @@ fn test05_srgb_mapping() {
         aov: None,
         non_finite: 0,
         moments: None,
+        samples: 0,
     };
     assert_eq!(
         output::to_rgb8(&img, ToneMap::Clamp),

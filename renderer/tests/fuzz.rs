@@ -169,6 +169,7 @@ fn work(seconds: f64, seed: u64, render_every: usize, current: &Path) {
     let tiny = Overrides {
         size: Some((4, 3)),
         samples: Some(1),
+        adaptive: false,
     };
     let mut runs = 0u64;
     std::panic::set_hook(Box::new(|_| {}));

@@ -82,6 +82,8 @@ pub struct Overrides {
     pub size: Option<(u32, u32)>,
     /// Samples per pixel (`--spp N`).
     pub samples: Option<u32>,
+    /// Adaptive sampling on (`--adaptive`).
+    pub adaptive: bool,
 }
 
 impl Overrides {
@@ -161,6 +163,7 @@ it bounds the recursion of the classic model and the length of a path",
     if let Some(n) = overrides.samples {
         r.samples = n;
     }
+    r.adaptive |= overrides.adaptive;
     let r = desc.render.get_ref();
     for (name, v) in [
         ("background", r.background),
@@ -184,6 +187,7 @@ it bounds the recursion of the classic model and the length of a path",
         integrator: r.integrator,
         rr_depth: r.rr_depth,
         sampler: r.sampler,
+        adaptive: r.adaptive,
     };
     let classic = r.integrator == Integrator::Classic;
     let camera = build_camera(&desc.camera, r.width, r.height, &src)?;

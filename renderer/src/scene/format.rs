@@ -177,6 +177,9 @@ pub struct RenderDesc {
     /// How samples are placed.
     #[serde(default)]
     pub sampler: crate::sampler::SamplerKind,
+    /// Share the samples out by the noise around each pixel.
+    #[serde(default)]
+    pub adaptive: bool,
 }
 
 fn one() -> u32 {

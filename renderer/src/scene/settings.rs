@@ -25,6 +25,9 @@ pub struct Settings {
     pub rr_depth: u32,
     /// Sample placement.
     pub sampler: crate::sampler::SamplerKind,
+    /// Share the samples out by the noise around each pixel (adaptive.rs): `samples` is
+    /// then the average a pixel.
+    pub adaptive: bool,
 }
 
 /// Light transport.

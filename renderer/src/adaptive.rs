@@ -1,0 +1,245 @@
+//! Adaptive sampling: where a pixel's samples go when `render.adaptive` is on.
+//!
+//! A budget of `spp` samples a pixel is spent in two passes. The pilot traces
+//! [`pilot`]`(spp)` samples in every pixel; the rest of the budget is then shared out
+//! among the pixels in proportion to the noise their neighbours' pilots showed (a pixel's
+//! standard deviation, estimated from the 8 pixels around it), with a part shared evenly,
+//! and traced from a second, independent stream of sample numbers. A pixel's value is
+//! the mean of all its samples.
+//!
+//! **Why the neighbours, and not the pixel itself.** A pixel's count must not depend on
+//! its own pilot samples: if it did, the mean would be biased. A pixel at the edge of a
+//! light whose pilot samples all fell on the light would show no variance, get no more
+//! samples, and keep a value that is too bright, while its neighbours whose pilots were
+//! mixed would be pulled to the truth: over many renders such pixels come out too bright
+//! on average (at 4 pilot samples and 90 % coverage, by 6 % of the light's radiance).
+//! Here a pixel's count is a function of other pixels' pilots only, which are
+//! independent of its own (every pixel's sampler is seeded by its own index), so its
+//! mean is unbiased for any count: E[mean | count] is the pixel's value. The share of
+//! the budget is normalized by the pixels that do not touch it either (the mean of the
+//! estimates outside its 3 × 3 block), so nothing in a pixel's count reads its own
+//! samples; the total then matches the budget only on average (within a few samples in
+//! a whole image), and the renderer reports the samples it took.
+//!
+//! Allocation proportional to the standard deviation is the one that minimizes the
+//! summed variance of the pixel means for a fixed total, when each pixel's variance
+//! falls as 1/n (Neyman allocation). Noise is spatially coherent (the edge of a light, a
+//! caustic, a soft shadow's penumbra), which is what makes the neighbours a good guess.
+
+use crate::material::Color;
+
+/// The share of the extra samples spread evenly over all pixels, so a pixel whose
+/// neighbours' pilots happened to show no noise (a caustic that no pilot path found)
+/// still gets some.
+pub const EVEN_SHARE: f64 = 0.25;
+
+/// No pixel takes more than this many times the budget.
+pub const MAX_FACTOR: f64 = 64.0;
+
+/// The pilot's samples a pixel for a budget of `spp`: a quarter; `None` (no adapting)
+/// below 8 a pixel, where the pilot would have fewer than two samples (a variance needs
+/// two), and the two passes' separate stratifications cost more than the sharing gains.
+pub fn pilot(spp: u32) -> Option<u32> {
+    (spp >= 8).then_some(spp / 4)
+}
+
+/// The variance of one sample, summed over R, G and B, from `n` samples' `sum` and their
+/// products' sums `sq` (R², G², B² first), as [`crate::render`]'s rows gather them: the
+/// unbiased sample variance, 0 when it is not finite (a non-finite sample is reported by
+/// the render itself).
+pub fn variance(sum: Color, sq: &[f64; 6], n: u32) -> f64 {
+    if n < 2 {
+        return 0.0;
+    }
+    let n = n as f64;
+    let mut v = 0.0;
+    for c in 0..3 {
+        let m = sum[c] as f64 / n;
+        let d = (sq[c] - n * m * m) / (n - 1.0);
+        if !d.is_finite() {
+            return 0.0;
+        }
+        // Rounding can take a tiny variance below 0.
+        v += d.max(0.0);
+    }
+    v
+}
+
+/// The cost of one sample, in units of a ray, from `n` samples that drew `dimensions`
+/// sampler dimensions in all: one for the camera ray and one for every few dimensions a
+/// path vertex draws (its light sample, its direction, its roulette). A proxy that is the
+/// same on every run, where a clock would not be.
+pub fn cost(dimensions: u64, n: u32) -> f64 {
+    1.0 + dimensions as f64 / (4.0 * n.max(1) as f64)
+}
+
+/// The extra samples of each pixel of a `w` × `h` image (row-major) for `extra` more
+/// samples a pixel on average, from each pixel's pilot `variance` and `cost` a sample.
+///
+/// Pixel p gets `extra · (EVEN_SHARE + (1 − EVEN_SHARE) · a_p / ā_p)`, rounded up or
+/// down at random by a hash of its index (so the expected count is that number), at most
+/// `MAX_FACTOR · extra`. Its score `a_p = σ_p / √c_p` is the count that minimizes the
+/// summed variance of the means at a fixed total time (Neyman's allocation with costs),
+/// where σ_p is the square root of the mean variance of the 8 pixels around p, and c_p
+/// their mean cost, not p's own; ā_p is the mean score of the pixels outside p's 3 × 3
+/// block (whose scores do not read p's pilot either). When ā_p is 0 (no noise anywhere
+/// else) the share is even.
+pub fn extra_counts(w: usize, h: usize, variance: &[f64], cost: &[f64], extra: u32) -> Vec<u32> {
+    assert_eq!(variance.len(), w * h, "one variance a pixel");
+    assert_eq!(cost.len(), w * h, "one cost a pixel");
+    let score: Vec<f64> = (0..w * h)
+        .map(|p| {
+            let (i, j) = (p % w, p / w);
+            let (mut v, mut c, mut n) = (0.0, 0.0, 0u32);
+            for (a, b) in block(i, j, w, h) {
+                if (a, b) != (i, j) {
+                    v += variance[b * w + a];
+                    c += cost[b * w + a];
+                    n += 1;
+                }
+            }
+            if n > 0 && c > 0.0 {
+                (v / c).sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let total: f64 = score.iter().sum();
+    let extra = extra as f64;
+    (0..w * h)
+        .map(|p| {
+            let (i, j) = (p % w, p / w);
+            let (mut near, mut n) = (0.0, 0usize);
+            for (a, b) in block(i, j, w, h) {
+                near += score[b * w + a];
+                n += 1;
+            }
+            let rest = w * h - n;
+            let mean = if rest > 0 {
+                ((total - near) / rest as f64).max(0.0)
+            } else {
+                0.0
+            };
+            let share = if mean > 0.0 {
+                EVEN_SHARE + (1.0 - EVEN_SHARE) * score[p] / mean
+            } else {
+                1.0
+            };
+            let x = (extra * share).min(MAX_FACTOR * extra);
+            let u = crate::sampler::uniform(p as u64, 0xada7, 0);
+            (x + u).floor() as u32
+        })
+        .collect()
+}
+
+/// The pixels of the 3 × 3 block around (i, j) that lie in the image.
+fn block(i: usize, j: usize, w: usize, h: usize) -> impl Iterator<Item = (usize, usize)> {
+    let cols = i.saturating_sub(1)..(i + 2).min(w);
+    let rows = j.saturating_sub(1)..(j + 2).min(h);
+    rows.flat_map(move |b| cols.clone().map(move |a| (a, b)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A `w` × `h` image of variances with one noisy pixel at (`x`, `y`).
+    fn spike(w: usize, h: usize, x: usize, y: usize, v: f64) -> Vec<f64> {
+        let mut var = vec![0.01; w * h];
+        var[y * w + x] = v;
+        var
+    }
+
+    #[test]
+    fn the_pilot_is_a_quarter_from_eight_samples() {
+        assert_eq!(pilot(7), None);
+        assert_eq!(pilot(8), Some(2));
+        assert_eq!(pilot(16), Some(4));
+        assert_eq!(pilot(258), Some(64));
+    }
+
+    #[test]
+    fn variance_is_the_unbiased_sample_variance_over_rgb() {
+        // Samples (1, 0, 2), (3, 0, 2): variance 2 in R, 0 in G and B.
+        let sum = Color::new(4.0, 0.0, 4.0);
+        let sq = [10.0, 0.0, 8.0, 0.0, 0.0, 0.0];
+        assert!((variance(sum, &sq, 2) - 2.0).abs() < 1e-12);
+        assert_eq!(variance(sum, &sq, 1), 0.0);
+        assert_eq!(variance(Color::new(f32::NAN, 0.0, 0.0), &sq, 2), 0.0);
+    }
+
+    #[test]
+    fn a_pixels_count_does_not_read_its_own_pilot() {
+        let (w, h) = (9, 7);
+        let cost = vec![1.0; w * h];
+        let quiet = extra_counts(w, h, &spike(w, h, 4, 3, 0.01), &cost, 12);
+        let loud = extra_counts(w, h, &spike(w, h, 4, 3, 100.0), &cost, 12);
+        let mut costly = cost.clone();
+        costly[3 * w + 4] = 50.0;
+        let dear = extra_counts(w, h, &spike(w, h, 4, 3, 0.01), &costly, 12);
+        // The noisy pixel's own count is the same; its neighbours' counts rise, and fall
+        // when the pixel is dear.
+        assert_eq!(quiet[3 * w + 4], loud[3 * w + 4]);
+        assert_eq!(quiet[3 * w + 4], dear[3 * w + 4]);
+        for (a, b) in block(4, 3, w, h).filter(|&q| q != (4, 3)) {
+            let p = b * w + a;
+            assert!(
+                loud[p] > 4 * quiet[p],
+                "neighbour ({a}, {b}): {} vs {}",
+                loud[p],
+                quiet[p]
+            );
+            assert!(
+                dear[p] < quiet[p],
+                "neighbour ({a}, {b}): {} vs {}",
+                dear[p],
+                quiet[p]
+            );
+        }
+    }
+
+    #[test]
+    fn counts_share_out_the_budget() {
+        let (w, h) = (64, 48);
+        let var: Vec<f64> = (0..w * h)
+            .map(|p| ((p * 7919) % 101) as f64 / 10.0)
+            .collect();
+        let cost: Vec<f64> = (0..w * h).map(|p| 1.0 + ((p * 31) % 7) as f64).collect();
+        let extra = extra_counts(w, h, &var, &cost, 24);
+        let mean = extra.iter().map(|&k| k as f64).sum::<f64>() / (w * h) as f64;
+        assert!((mean - 24.0).abs() < 0.5, "mean extra {mean}");
+        // Every pixel keeps at least the even share.
+        let least = *extra.iter().min().unwrap();
+        assert!(least as f64 >= (EVEN_SHARE * 24.0).floor(), "least {least}");
+    }
+
+    #[test]
+    fn no_noise_shares_evenly_and_one_pixel_takes_at_most_its_cap() {
+        let (w, h) = (40, 40);
+        let cost = vec![1.0; w * h];
+        assert!(extra_counts(w, h, &vec![0.0; w * h], &cost, 10)
+            .iter()
+            .all(|&k| k == 10));
+        // All the noise around one pixel: it is capped.
+        let mut var = vec![0.0; w * h];
+        for (a, b) in block(20, 20, w, h) {
+            var[b * w + a] = 1e9;
+        }
+        var[20 * w + 20] = 0.0;
+        let extra = extra_counts(w, h, &var, &cost, 10);
+        assert_eq!(extra[20 * w + 20], (MAX_FACTOR * 10.0) as u32);
+        // A 1 × 1 image has no neighbours.
+        assert_eq!(extra_counts(1, 1, &[5.0], &[1.0], 6), vec![6]);
+    }
+
+    #[test]
+    fn blocks_stop_at_the_image_edges() {
+        assert_eq!(block(0, 0, 3, 2).count(), 4);
+        assert_eq!(block(1, 1, 3, 3).count(), 9);
+        assert_eq!(
+            block(2, 1, 3, 2).collect::<Vec<_>>(),
+            vec![(1, 0), (2, 0), (1, 1), (2, 1)]
+        );
+    }
+}
