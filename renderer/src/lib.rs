@@ -7,6 +7,7 @@ pub mod adaptive;
 pub mod aggregate;
 pub mod bvh;
 pub mod camera;
+pub mod guide;
 pub mod hit;
 pub mod light;
 pub mod material;

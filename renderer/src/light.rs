@@ -83,7 +83,7 @@ pub(crate) struct LightSample {
 /// Whether the linear part `m` of a transform is a similarity: orthogonal columns of one
 /// length, to a relative 1e-5 (a rotation and a uniform scale in f32 are that, to
 /// rounding). Returns the scale.
-fn similarity_scale(m: &crate::real::Mat3) -> Option<f64> {
+pub(crate) fn similarity_scale(m: &crate::real::Mat3) -> Option<f64> {
     let c = [m.x_axis, m.y_axis, m.z_axis].map(crate::real::dvec3);
     let s2 = c[0].length_squared();
     let tol = 1e-5 * s2;

@@ -169,12 +169,13 @@ Check the scene's numbers (renderer/docs/robustness.md)",
             );
             output::write(&img, &out, map).with_context(|| format!("writing {}", out.display()))?;
             // With adaptive sampling the count is the average the pixels took.
-            let spp = if s.settings.adaptive {
-                let px = (img.width as u64 * img.height as u64).max(1);
-                format!("adaptive, {:.3} spp", img.samples as f64 / px as f64)
-            } else {
-                format!("{} spp", s.settings.samples)
-            };
+            let spp =
+                if s.settings.adaptive && renderer::adaptive::pilot(s.settings.samples).is_some() {
+                    let px = (img.width as u64 * img.height as u64).max(1);
+                    format!("adaptive, {:.3} spp", img.samples as f64 / px as f64)
+                } else {
+                    format!("{} spp", s.settings.samples)
+                };
             eprintln!(
                 "{}: {}x{} px, {spp}, {:.3} s -> {}",
                 scene.display(),

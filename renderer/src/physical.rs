@@ -13,6 +13,7 @@
 //!   (unidirectional path tracing with next-event estimation, MIS, `max_depth` and Russian
 //!   roulette from `rr_depth`).
 
+use crate::guide::{AtVertex, Ball, Pick, MAX_GUIDES};
 use crate::hit::Hit;
 use crate::light::frame;
 use crate::ray::Ray;
@@ -77,6 +78,16 @@ struct BsdfSample {
     eta: f64,
 }
 
+/// A cosine-weighted direction about unit `n` from the 2D sample `u`.
+#[inline(always)]
+fn cosine_dir(n: glam::DVec3, (u1, u2): (f64, f64)) -> glam::DVec3 {
+    let r = u1.sqrt();
+    let (cos_phi, sin_phi) = cos_sin_turn(u2);
+    let (t, b) = frame(n);
+    let local_z = (1.0 - u1).max(0.0).sqrt();
+    t * (r * cos_phi) + b * (r * sin_phi) + n * local_z
+}
+
 /// The surface at a hit, oriented for shading.
 struct Surface<'a> {
     p: Vec3,
@@ -112,12 +123,7 @@ impl Surface<'_> {
         let n = self.ns * side;
         match self.m.model {
             MaterialModel::Diffuse => {
-                let (u1, u2) = s.next_2d();
-                let r = u1.sqrt();
-                let (cos_phi, sin_phi) = cos_sin_turn(u2);
-                let (t, b) = frame(n);
-                let local_z = (1.0 - u1).max(0.0).sqrt();
-                let dir = t * (r * cos_phi) + b * (r * sin_phi) + n * local_z;
+                let dir = cosine_dir(n, s.next_2d());
                 let (f, pdf) = self.eval_diffuse(wo, dir);
                 if pdf <= 0.0 {
                     return None;
@@ -178,6 +184,8 @@ pub struct PhysicalIntegrator<'a> {
     scene: &'a Scene,
     spawn: Spawn,
     env: Option<glam::DVec3>,
+    /// Spheres around the specular objects, when `render.guides` is on (guide.rs).
+    guides: Vec<Ball>,
     /// A deliberate fault (tests only).
     pub fault: Option<Fault>,
 }
@@ -195,8 +203,41 @@ impl<'a> PhysicalIntegrator<'a> {
             scene,
             spawn,
             env,
+            guides: if scene.settings.guides {
+                guide_balls(scene)
+            } else {
+                Vec::new()
+            },
             fault: None,
         }
+    }
+
+    /// Samples the continuation at a diffuse vertex with guides facing it: the cosine
+    /// lobe or a guide's cone (guide.rs), weighted by the mixture's density.
+    fn sample_guided(
+        &self,
+        s: &Surface,
+        wo: glam::DVec3,
+        smp: &mut PixelSampler,
+        g: &AtVertex,
+    ) -> Option<BsdfSample> {
+        let u = smp.next_2d();
+        let side = if s.ns.dot(wo) >= 0.0 { 1.0 } else { -1.0 };
+        let (dir, own) = match g.pick(u) {
+            Pick::Cosine(u1) => (cosine_dir(s.ns * side, (u1, u.1)), None),
+            Pick::Cone(k, dir) => (dir, Some(k)),
+        };
+        let (f, cos_pdf) = s.eval_diffuse(wo, dir);
+        if cos_pdf <= 0.0 {
+            return None;
+        }
+        let pdf = g.pdf(cos_pdf, dir, own);
+        Some(BsdfSample {
+            dir,
+            weight: f / pdf,
+            pdf,
+            eta: 1.0,
+        })
     }
 
     fn surface(&self, hit: &Hit) -> Surface<'a> {
@@ -263,7 +304,22 @@ impl<'a> PhysicalIntegrator<'a> {
     /// Next-event estimation at a non-delta surface: every light once, area lights and the
     /// environment weighted by MIS against BSDF sampling.
     #[inline(always)]
-    fn direct_light(&self, s: &Surface, wo: glam::DVec3, smp: &mut PixelSampler) -> glam::DVec3 {
+    fn direct_light(
+        &self,
+        s: &Surface,
+        wo: glam::DVec3,
+        smp: &mut PixelSampler,
+        g: &AtVertex,
+    ) -> glam::DVec3 {
+        // The BSDF strategy's density of a light direction: the guided mixture's when
+        // guides face the vertex.
+        let bsdf_pdf = |pdf: f64, wi: glam::DVec3| {
+            if g.active() {
+                g.pdf(pdf, wi, None)
+            } else {
+                pdf
+            }
+        };
         let mut sum = glam::DVec3::ZERO;
         let p = dv(s.p);
         for light in &self.scene.lights {
@@ -295,6 +351,7 @@ impl<'a> PhysicalIntegrator<'a> {
                     let pdf_l = 1.0 / (4.0 * PI);
                     let (f, pdf_b) = self.eval_light(s, wo, wi);
                     if f != glam::DVec3::ZERO && !self.occluded(s, wi, f64::INFINITY) {
+                        let pdf_b = bsdf_pdf(pdf_b, wi);
                         sum += f * rgb(light.color) * (mis(pdf_l, pdf_b) / pdf_l);
                     }
                 }
@@ -311,6 +368,7 @@ impl<'a> PhysicalIntegrator<'a> {
                 continue;
             }
             if !self.occluded(s, ls.wi, ls.dist) {
+                let pdf_b = bsdf_pdf(pdf_b, ls.wi);
                 sum += f * rgb(light.radiance) * (mis(ls.pdf, pdf_b) / ls.pdf);
             }
         }
@@ -380,10 +438,23 @@ impl<'a> PhysicalIntegrator<'a> {
             if depth >= max_depth {
                 break;
             }
+            // Guides pay only when the path goes on after the specular object it meets
+            // next: a vertex two or more before the last.
+            let g = if !s.is_delta() && !self.guides.is_empty() && depth + 1 < max_depth {
+                let side = if s.ns.dot(wo) >= 0.0 { 1.0 } else { -1.0 };
+                AtVertex::new(&self.guides, dv(s.p), s.ns * side)
+            } else {
+                AtVertex::default()
+            };
             if !s.is_delta() {
-                l += beta * self.direct_light(&s, wo, smp);
+                l += beta * self.direct_light(&s, wo, smp, &g);
             }
-            let Some(bs) = s.sample(wo, smp) else { break };
+            let bs = if g.active() {
+                self.sample_guided(&s, wo, smp, &g)
+            } else {
+                s.sample(wo, smp)
+            };
+            let Some(bs) = bs else { break };
             beta *= bs.weight;
             prev_pdf = bs.pdf;
             eta_scale *= bs.eta * bs.eta;
@@ -403,4 +474,50 @@ impl<'a> PhysicalIntegrator<'a> {
         }
         l
     }
+}
+
+/// Spheres around the scene's specular (conductor and dielectric) objects, for guide.rs:
+/// a sphere placed by a similarity is its own, any other bounded object has the sphere
+/// around its bounding box. None when there are more than [`MAX_GUIDES`].
+fn guide_balls(scene: &Scene) -> Vec<Ball> {
+    let mut balls = Vec::new();
+    for inst in scene.root.in_scene_order() {
+        let m = scene.material(inst.material);
+        if !matches!(
+            m.model,
+            MaterialModel::Conductor | MaterialModel::Dielectric
+        ) {
+            continue;
+        }
+        let ball = match (&inst.shape, &inst.xf) {
+            (crate::Shape::Sphere, None) => Some(Ball {
+                centre: glam::DVec3::ZERO,
+                radius: 1.0,
+            }),
+            (crate::Shape::Sphere, Some(x)) => {
+                crate::light::similarity_scale(&x.matrix()).map(|radius| Ball {
+                    centre: dv(x.translation()),
+                    radius,
+                })
+            }
+            _ => None,
+        }
+        .or_else(|| {
+            let b = inst.bounds();
+            let (lo, hi) = (dv(b.min), dv(b.max));
+            (lo.is_finite() && hi.is_finite()).then(|| Ball {
+                centre: (lo + hi) * 0.5,
+                radius: (hi - lo).length() * 0.5,
+            })
+        });
+        match ball {
+            Some(b) if b.radius > 0.0 && b.radius.is_finite() => balls.push(b),
+            // An unbounded specular object (a mirror plane): no cone to aim at.
+            _ => {}
+        }
+    }
+    if balls.len() > MAX_GUIDES {
+        balls.clear();
+    }
+    balls
 }

@@ -148,7 +148,7 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
                     let sq_wanted = !mrow.is_empty();
                     tracer.trace_row(
                         j,
-                        0,
+                        Pass::ALONE,
                         Counts::Every(spp),
                         sq_wanted,
                         &mut |i, n, sum, sq, _| {
@@ -226,28 +226,45 @@ fn render_adaptive(
 ) -> (usize, u64) {
     let w = t.w;
     let h = rgb.len() / (3 * w.max(1));
-    // The pilot: each pixel's sum and its products' sums (for its variance).
-    let mut sums = vec![(Color::ZERO, [0f64; 6], 0u64); w * h];
-    sums.par_chunks_mut(w).enumerate().for_each(|(j, row)| {
-        t.trace_row(j, 0, Counts::Every(pilot), true, &mut |i, _, sum, sq, d| {
-            row[i] = (sum, *sq, d)
+    let passes = Pass::adaptive(t.kind, pilot, (w * h) as u64);
+    // The pilot: each pixel's sum, variance and cost, and its products' sums when the
+    // moments are wanted (kept only then: at the pixel limit every byte a pixel counts).
+    let wants_sq = moment_rows.iter().any(|m| !m.is_empty());
+    let mut sums = vec![Color::ZERO; w * h];
+    let mut variance = vec![0f64; w * h];
+    let mut cost = vec![0f64; w * h];
+    let mut pilot_sq = vec![[0f64; 6]; if wants_sq { w * h } else { 0 }];
+    let mut sq_rows: Vec<&mut [[f64; 6]]> = if wants_sq {
+        pilot_sq.chunks_mut(w).collect()
+    } else {
+        (0..h).map(|_| -> &mut [[f64; 6]] { &mut [] }).collect()
+    };
+    sums.par_chunks_mut(w)
+        .zip(variance.par_chunks_mut(w))
+        .zip(cost.par_chunks_mut(w))
+        .zip(sq_rows.par_iter_mut())
+        .enumerate()
+        .for_each(|(j, (((s, v), c), q))| {
+            t.trace_row(
+                j,
+                passes[0],
+                Counts::Every(pilot),
+                true,
+                &mut |i, _, sum, sq, d| {
+                    s[i] = sum;
+                    v[i] = adaptive::variance(sum, sq, pilot);
+                    c[i] = adaptive::cost(d, pilot);
+                    if let Some(q) = q.get_mut(i) {
+                        *q = *sq;
+                    }
+                },
+            );
+            if let Some(b) = bar {
+                b.inc(1);
+            }
         });
-        if let Some(b) = bar {
-            b.inc(1);
-        }
-    });
-    let variance: Vec<f64> = sums
-        .iter()
-        .map(|(sum, sq, _)| adaptive::variance(*sum, sq, pilot))
-        .collect();
-    let cost: Vec<f64> = sums
-        .iter()
-        .map(|(.., d)| adaptive::cost(*d, pilot))
-        .collect();
+    drop(sq_rows);
     let extra = adaptive::extra_counts(w, h, &variance, &cost, spp - pilot);
-    // The rest, from a second stream of sample numbers (pixel indices offset by w·h), so
-    // the extra samples are independent of the pilot's.
-    let stream = (w * h) as u64;
     let samples = (w * h) as u64 * pilot as u64 + extra.iter().map(|&k| k as u64).sum::<u64>();
     let bad = rgb
         .par_chunks_mut(w * 3)
@@ -261,16 +278,15 @@ fn render_adaptive(
             let sq_wanted = !mrow.is_empty();
             let finish =
                 |row: &mut [f32], mrow: &mut [f32], i: usize, k: u32, sum: Color, sq: &[f64; 6]| {
-                    let (s1, q1, _) = &first[i];
-                    let mut q = *q1;
+                    let mut q = pilot_sq.get(j * w + i).copied().unwrap_or_default();
                     for m in 0..6 {
                         q[m] += sq[m];
                     }
-                    write_pixel(row, mrow, i, pilot + k, *s1 + sum, &q)
+                    write_pixel(row, mrow, i, pilot + k, first[i] + sum, &q)
                 };
             t.trace_row(
                 j,
-                stream,
+                passes[1],
                 Counts::Each(counts),
                 sq_wanted,
                 &mut |i, k, sum, sq, _| {
@@ -295,6 +311,57 @@ fn render_adaptive(
         .sum();
     (bad, samples)
 }
+
+/// Where a pass's samples come from: the samplers of pixel numbers `stream + j·w + i`,
+/// sample numbers from `first`, in a set of `set` samples (else of the pixel's count).
+#[derive(Clone, Copy)]
+struct Pass {
+    stream: u64,
+    first: u32,
+    set: Option<u32>,
+}
+
+impl Pass {
+    /// A render of one pass: sample k of a pixel's count.
+    const ALONE: Pass = Pass {
+        stream: 0,
+        first: 0,
+        set: None,
+    };
+
+    /// The adaptive render's pilot and rest (adaptive.rs). For `independent` and
+    /// `sobol`, one sequence: the pilot is its first `pilot` samples and the rest follow,
+    /// so a pixel's samples are as well spread as a plain render's of the same count
+    /// (`sobol` from a set of [`SEQUENCE`], whose prefixes of 2^m samples are
+    /// (0, m, 2)-nets). Every sample is uniform whatever the count, and the count does not
+    /// read the pixel's own samples, so the mean stays unbiased. `stratified` strata need
+    /// the count in advance: the pilot is a set of `pilot`, and the rest a set of the
+    /// pixel's extra count from a second stream (pixel numbers offset by `pixels`),
+    /// independent of the pilot's.
+    fn adaptive(kind: crate::sampler::SamplerKind, pilot: u32, pixels: u64) -> [Pass; 2] {
+        if kind == crate::sampler::SamplerKind::Stratified {
+            let rest = Pass {
+                stream: pixels,
+                ..Pass::ALONE
+            };
+            return [Pass::ALONE, rest];
+        }
+        let set = Some(SEQUENCE);
+        [
+            Pass { set, ..Pass::ALONE },
+            Pass {
+                first: pilot,
+                set,
+                ..Pass::ALONE
+            },
+        ]
+    }
+}
+
+/// The set an adaptive render's `independent` and `sobol` samples come from: a power of
+/// two above any pixel's count (the pilot is under 2³⁰, a quarter of a 32-bit budget,
+/// and adaptive.rs caps the rest at [`adaptive::MAX_EXTRA`]).
+pub const SEQUENCE: u32 = 1 << 31;
 
 /// The samples of each pixel of a row: the same count in every pixel, or one each. (One
 /// type, not a closure, so that the row loop is compiled once and the integrator inlined
@@ -323,7 +390,8 @@ struct RowTracer<'a> {
 
 impl RowTracer<'_> {
     /// Traces `count(i)` samples in each pixel `i` of row `j` (pixel by pixel, sample by
-    /// sample), with the samplers of pixel numbers `stream + j·w + i`, and hands each
+    /// sample), with the samplers of `pass` (pixel numbers `stream + j·w + i`, sample
+    /// numbers from `first`, of a set of `set` or else of the pixel's count), and hands each
     /// pixel that has samples to `done(i, count, sum, products, dimensions)`: the sum of
     /// its colours, when `sq_wanted` the sum of their products R², G², B², RG, RB, GB
     /// (else zeros), and the sampler dimensions its samples used (a measure of their
@@ -331,7 +399,7 @@ impl RowTracer<'_> {
     fn trace_row(
         &self,
         j: usize,
-        stream: u64,
+        pass: Pass,
         count: Counts,
         sq_wanted: bool,
         done: &mut PixelDone,
@@ -370,7 +438,12 @@ impl RowTracer<'_> {
                 let (dx, dy) = if self.centre {
                     (0.5, 0.5)
                 } else {
-                    let mut smp = PixelSampler::new(self.kind, stream + (j * w + i) as u64, s, n_i);
+                    let mut smp = PixelSampler::new(
+                        self.kind,
+                        pass.stream + (j * w + i) as u64,
+                        pass.first + s,
+                        pass.set.unwrap_or(n_i),
+                    );
                     if self.classic {
                         smp.next_2d()
                     } else {

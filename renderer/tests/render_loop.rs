@@ -7,7 +7,7 @@
 use renderer::adaptive;
 use renderer::physical::PhysicalIntegrator;
 use renderer::render::{render, Image, Options};
-use renderer::sampler::PixelSampler;
+use renderer::sampler::{PixelSampler, SamplerKind};
 use renderer::scene::Integrator;
 use renderer::scene::{Color, Scene};
 use renderer::shading::Shader;
@@ -36,14 +36,27 @@ impl<'a> Plain<'a> {
         }
     }
 
-    fn pixel(&self, i: usize, j: usize, stream: u64, count: u32) -> (Color, [f64; 6], u64) {
+    /// Samples `first..first + count` of a set of `set` (else of `count`) from the pixel
+    /// numbers offset by `stream`.
+    fn pixel(
+        &self,
+        i: usize,
+        j: usize,
+        (stream, first, set): (u64, u32, Option<u32>),
+        count: u32,
+    ) -> (Color, [f64; 6], u64) {
         let scene = self.scene;
         let pixel = stream + (j * scene.settings.width as usize + i) as u64;
         let mut sum = Color::ZERO;
         let mut sq = [0f64; 6];
         let mut dims = 0u64;
         for s in 0..count {
-            let mut smp = PixelSampler::new(scene.settings.sampler, pixel, s, count);
+            let mut smp = PixelSampler::new(
+                scene.settings.sampler,
+                pixel,
+                first + s,
+                set.unwrap_or(count),
+            );
             let (dx, dy) = if self.centre {
                 (0.5, 0.5)
             } else {
@@ -109,7 +122,7 @@ fn check(file: &str, spp: u32) {
     assert_eq!(img.samples, (w * h) as u64 * spp as u64);
     for j in 0..h {
         for i in 0..w {
-            let (sum, sq, _) = plain.pixel(i, j, 0, spp);
+            let (sum, sq, _) = plain.pixel(i, j, (0, 0, None), spp);
             compare(
                 &img,
                 &format!("{file}, {spp} spp"),
@@ -126,16 +139,25 @@ fn check(file: &str, spp: u32) {
 /// samples in every pixel, the extra counts from the pilots' variances and costs, the
 /// extra samples from the second stream (pixel numbers offset by w·h), and each pixel the
 /// mean of all its samples.
-fn check_adaptive(file: &str, spp: u32) {
+fn check_adaptive(file: &str, spp: u32, sampler: SamplerKind) {
     let mut scene = Scene::load(Path::new(file)).unwrap();
     scene.settings.adaptive = true;
+    scene.settings.sampler = sampler;
     let opts = options(spp);
     let img = render(&scene, &opts);
     let plain = Plain::new(&scene, &opts, spp);
     let (w, h) = (img.width as usize, img.height as usize);
     let pilot = adaptive::pilot(spp).expect("a budget that adapts");
+    // Stratified: two sets, the rest's from pixel numbers offset by w·h; the others: one
+    // sequence of SEQUENCE samples, the rest after the pilot.
+    let (pass0, pass1) = if scene.settings.sampler == SamplerKind::Stratified {
+        ((0, 0, None), ((w * h) as u64, 0, None))
+    } else {
+        let set = Some(renderer::render::SEQUENCE);
+        ((0, 0, set), (0, pilot, set))
+    };
     let first: Vec<_> = (0..w * h)
-        .map(|p| plain.pixel(p % w, p / w, 0, pilot))
+        .map(|p| plain.pixel(p % w, p / w, pass0, pilot))
         .collect();
     let variance: Vec<f64> = first
         .iter()
@@ -153,7 +175,7 @@ fn check_adaptive(file: &str, spp: u32) {
     let total: u64 = extra.iter().map(|&k| u64::from(k)).sum();
     assert_eq!(img.samples, (w * h) as u64 * u64::from(pilot) + total);
     for (p, (s1, q1, _)) in first.iter().enumerate() {
-        let (s2, q2, _) = plain.pixel(p % w, p / w, (w * h) as u64, extra[p]);
+        let (s2, q2, _) = plain.pixel(p % w, p / w, pass1, extra[p]);
         let q: [f64; 6] = std::array::from_fn(|k| q1[k] + q2[k]);
         compare(
             &img,
@@ -180,6 +202,9 @@ fn physical_render_matches_one_sample_at_a_time() {
 
 #[test]
 fn adaptive_render_matches_its_definition() {
-    check_adaptive("../conformance/scenes/mitsuba/mi_area_soft_shadow.toml", 9);
-    check_adaptive("scenes/hierarchy.toml", 8);
+    let area = "../conformance/scenes/mitsuba/mi_area_soft_shadow.toml";
+    check_adaptive(area, 9, SamplerKind::Sobol);
+    check_adaptive(area, 12, SamplerKind::Stratified);
+    check_adaptive(area, 8, SamplerKind::Independent);
+    check_adaptive("scenes/hierarchy.toml", 8, SamplerKind::Sobol);
 }

@@ -139,6 +139,12 @@ pub fn check_mitsuba(
     fault: Option<Fault>,
 ) -> Result<MiOutcome> {
     let (scene, text) = load(entry)?;
+    anyhow::ensure!(
+        !scene.settings.adaptive,
+        "{}: render.adaptive is set, but the radiance test takes every pixel's mean to be of \
+`spp` samples (its standard errors); render the catalog scene without it",
+        entry.name
+    );
     let t0 = std::time::Instant::now();
     let ours = render_estimate(&scene, spp, fault);
     let seconds = t0.elapsed().as_secs_f64();

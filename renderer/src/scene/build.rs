@@ -188,6 +188,7 @@ it bounds the recursion of the classic model and the length of a path",
         rr_depth: r.rr_depth,
         sampler: r.sampler,
         adaptive: r.adaptive,
+        guides: r.guides,
     };
     let classic = r.integrator == Integrator::Classic;
     let camera = build_camera(&desc.camera, r.width, r.height, &src)?;

@@ -180,8 +180,14 @@ pub struct RenderDesc {
     /// Share the samples out by the noise around each pixel.
     #[serde(default)]
     pub adaptive: bool,
+    /// Aim some path directions at mirror and glass objects (on unless turned off).
+    #[serde(default = "yes")]
+    pub guides: bool,
 }
 
+fn yes() -> bool {
+    true
+}
 fn one() -> u32 {
     1
 }

@@ -28,6 +28,8 @@ pub struct Settings {
     /// Share the samples out by the noise around each pixel (adaptive.rs): `samples` is
     /// then the average a pixel.
     pub adaptive: bool,
+    /// Physical model: aim some continuation directions at specular objects (guide.rs).
+    pub guides: bool,
 }
 
 /// Light transport.
