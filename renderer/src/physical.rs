@@ -309,16 +309,13 @@ impl<'a> PhysicalIntegrator<'a> {
         s: &Surface,
         wo: glam::DVec3,
         smp: &mut PixelSampler,
-        g: &AtVertex,
+        g: Option<&AtVertex>,
     ) -> glam::DVec3 {
         // The BSDF strategy's density of a light direction: the guided mixture's when
         // guides face the vertex.
-        let bsdf_pdf = |pdf: f64, wi: glam::DVec3| {
-            if g.active() {
-                g.pdf(pdf, wi, None)
-            } else {
-                pdf
-            }
+        let bsdf_pdf = |pdf: f64, wi: glam::DVec3| match g {
+            Some(g) => g.pdf(pdf, wi, None),
+            None => pdf,
         };
         let mut sum = glam::DVec3::ZERO;
         let p = dv(s.p);
@@ -405,6 +402,7 @@ impl<'a> PhysicalIntegrator<'a> {
         let mut prev_pdf = 0.0; // 0: the previous vertex was the camera or a delta lobe.
         let mut eta_scale = 1.0;
         let mut depth = 0u32;
+        let guided = !self.guides.is_empty();
         loop {
             let dir = dv(ray.d).normalize();
             let Some(hit) = self
@@ -440,19 +438,19 @@ impl<'a> PhysicalIntegrator<'a> {
             }
             // Guides pay only when the path goes on after the specular object it meets
             // next: a vertex two or more before the last.
-            let g = if !s.is_delta() && !self.guides.is_empty() && depth + 1 < max_depth {
+            // (Built only in a scene with guides: a vertex of any other pays one test.)
+            let g = if guided && !s.is_delta() && depth + 1 < max_depth {
                 let side = if s.ns.dot(wo) >= 0.0 { 1.0 } else { -1.0 };
-                AtVertex::new(&self.guides, dv(s.p), s.ns * side)
+                Some(AtVertex::new(&self.guides, dv(s.p), s.ns * side)).filter(|g| g.active())
             } else {
-                AtVertex::default()
+                None
             };
             if !s.is_delta() {
-                l += beta * self.direct_light(&s, wo, smp, &g);
+                l += beta * self.direct_light(&s, wo, smp, g.as_ref());
             }
-            let bs = if g.active() {
-                self.sample_guided(&s, wo, smp, &g)
-            } else {
-                s.sample(wo, smp)
+            let bs = match &g {
+                Some(g) => self.sample_guided(&s, wo, smp, g),
+                None => s.sample(wo, smp),
             };
             let Some(bs) = bs else { break };
             beta *= bs.weight;
