@@ -240,6 +240,7 @@ impl<'a> PhysicalIntegrator<'a> {
         })
     }
 
+    #[inline(always)]
     fn surface(&self, hit: &Hit) -> Surface<'a> {
         let ng = dv(hit.n_geo).normalize();
         let ns = if hit.flat_shaded() {
@@ -372,12 +373,20 @@ impl<'a> PhysicalIntegrator<'a> {
         sum
     }
 
-    /// Radiance along a camera ray.
+    /// Radiance along a camera ray. (Always inlined, with the path loops and what they
+    /// call, into the render loop: each out-of-line call there cost a `direct` frame 1–3 %
+    /// more instructions.)
+    #[inline(always)]
     pub fn li(&self, ray: &Ray, smp: &mut PixelSampler) -> Color {
         let s = &self.scene.settings;
         let v = match s.integrator {
-            Integrator::Path => self.path(ray, smp, s.max_depth, s.rr_depth),
-            _ => self.path(ray, smp, 2, u32::MAX),
+            // A path with guides is its own loop, so that one without them is compiled
+            // without their code (guide.rs; the `direct` integrator never guides).
+            Integrator::Path if !self.guides.is_empty() => {
+                self.path::<true>(ray, smp, s.max_depth, s.rr_depth)
+            }
+            Integrator::Path => self.path::<false>(ray, smp, s.max_depth, s.rr_depth),
+            _ => self.path::<false>(ray, smp, 2, u32::MAX),
         };
         Color::new(v.x as f32, v.y as f32, v.z as f32)
     }
@@ -388,7 +397,7 @@ impl<'a> PhysicalIntegrator<'a> {
     /// (Inlined into the render loop, its one caller there: out of line, a `direct` frame
     /// takes 3 % more instructions.)
     #[inline(always)]
-    fn path(
+    fn path<const GUIDED: bool>(
         &self,
         ray: &Ray,
         smp: &mut PixelSampler,
@@ -402,7 +411,6 @@ impl<'a> PhysicalIntegrator<'a> {
         let mut prev_pdf = 0.0; // 0: the previous vertex was the camera or a delta lobe.
         let mut eta_scale = 1.0;
         let mut depth = 0u32;
-        let guided = !self.guides.is_empty();
         loop {
             let dir = dv(ray.d).normalize();
             let Some(hit) = self
@@ -439,7 +447,7 @@ impl<'a> PhysicalIntegrator<'a> {
             // Guides pay only when the path goes on after the specular object it meets
             // next: a vertex two or more before the last.
             // (Built only in a scene with guides: a vertex of any other pays one test.)
-            let g = if guided && !s.is_delta() && depth + 1 < max_depth {
+            let g = if GUIDED && !s.is_delta() && depth + 1 < max_depth {
                 let side = if s.ns.dot(wo) >= 0.0 { 1.0 } else { -1.0 };
                 Some(AtVertex::new(&self.guides, dv(s.p), s.ns * side)).filter(|g| g.active())
             } else {

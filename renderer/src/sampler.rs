@@ -311,7 +311,13 @@ pub struct PixelSampler {
 impl PixelSampler {
     /// Sample `sample` of `spp` in pixel `pixel`.
     pub fn new(kind: SamplerKind, pixel: u64, sample: u32, spp: u32) -> Self {
-        let root = (spp as f64).sqrt().round() as u32;
+        // Only the stratified sampler reads the square root (a square root a sample
+        // otherwise: 0.4 % of a `direct` frame's instructions).
+        let root = if kind == SamplerKind::Stratified {
+            (spp as f64).sqrt().round() as u32
+        } else {
+            0
+        };
         let pixel_mix = mix_first(pixel);
         PixelSampler {
             kind,
