@@ -3,9 +3,11 @@
 //! A budget of `spp` samples a pixel is spent in two passes. The pilot traces
 //! [`pilot`]`(spp)` samples in every pixel; the rest of the budget is then shared out
 //! among the pixels in proportion to the noise their neighbours' pilots showed (a pixel's
-//! standard deviation, estimated from the 8 pixels around it), with a part shared evenly,
-//! and traced from a second, independent stream of sample numbers. A pixel's value is
-//! the mean of all its samples.
+//! standard deviation, estimated from the 8 pixels around it), with a part shared evenly.
+//! The rest continues each pixel's sequence of samples (`independent`, `sobol`) or is a
+//! second set from an independent stream (`stratified`, whose strata need the count in
+//! advance; render.rs's `Pass::adaptive`). A pixel's value is the mean of all its
+//! samples.
 //!
 //! **Why the neighbours, and not the pixel itself.** A pixel's count must not depend on
 //! its own pilot samples: if it did, the mean would be biased. A pixel at the edge of a

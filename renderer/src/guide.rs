@@ -26,6 +26,7 @@
 //! world bounding box. A scene with more than [`MAX_GUIDES`] such objects gets none (the
 //! density sums over all of them at every vertex).
 
+use crate::light::subtended;
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -78,17 +79,12 @@ impl AtVertex {
     pub fn new(balls: &[Ball], p: DVec3, n: DVec3) -> Self {
         let mut v = AtVertex::default();
         for b in balls.iter().take(MAX_GUIDES) {
-            let to = b.centre - p;
-            let d2 = to.length_squared();
-            if !(d2 > b.radius * b.radius) {
+            let Some(cone) = subtended(b.centre, b.radius, p, b.radius) else {
                 continue;
-            }
-            let d = d2.sqrt();
-            let axis = to / d;
-            let sin2 = (b.radius * b.radius / d2).min(1.0);
-            let one_minus_cos = sin2 / (1.0 + (1.0 - sin2).sqrt());
+            };
+            let (axis, one_minus_cos) = (cone.axis, cone.one_minus_cos);
             // Wholly below the horizon: cos(angle to n) < −sin θ_max.
-            if !(one_minus_cos > 0.0) || axis.dot(n) < -sin2.sqrt() {
+            if axis.dot(n) < -cone.sin2.sqrt() {
                 continue;
             }
             v.cones[v.n] = Cone {

@@ -83,7 +83,7 @@ pub(crate) struct LightSample {
 /// Whether the linear part `m` of a transform is a similarity: orthogonal columns of one
 /// length, to a relative 1e-5 (a rotation and a uniform scale in f32 are that, to
 /// rounding). Returns the scale.
-pub(crate) fn similarity_scale(m: &crate::real::Mat3) -> Option<f64> {
+fn similarity_scale(m: &crate::real::Mat3) -> Option<f64> {
     let c = [m.x_axis, m.y_axis, m.z_axis].map(crate::real::dvec3);
     let s2 = c[0].length_squared();
     let tol = 1e-5 * s2;
@@ -93,6 +93,51 @@ pub(crate) fn similarity_scale(m: &crate::real::Mat3) -> Option<f64> {
         && c[0].dot(c[2]).abs() <= tol
         && c[1].dot(c[2]).abs() <= tol;
     (ok && s2 > 0.0 && s2.is_finite()).then(|| s2.sqrt())
+}
+
+/// The world centre and radius of a sphere instance placed by a similarity (rotation,
+/// uniform scale, translation); `None` for anything else.
+pub(crate) fn sphere_ball(inst: &Instance) -> Option<(DVec3, f64)> {
+    match (&inst.shape, &inst.xf) {
+        (Shape::Sphere, None) => Some((DVec3::ZERO, 1.0)),
+        (Shape::Sphere, Some(x)) => {
+            similarity_scale(&x.matrix()).map(|r| (crate::real::dvec3(x.translation()), r))
+        }
+        _ => None,
+    }
+}
+
+/// The cone of directions a ball (centre `c`, radius `r`) subtends from `p`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Subtended {
+    /// Unit axis from `p` towards the centre.
+    pub axis: DVec3,
+    /// Distance from `p` to the centre.
+    pub dist: f64,
+    /// sin²θ_max.
+    pub sin2: f64,
+    /// 1 − cos θ_max, from sin²θ_max without cancellation (> 0).
+    pub one_minus_cos: f64,
+}
+
+/// The cone the ball (`c`, `r`) subtends from `p`, when `p` lies farther than `outside`
+/// from the centre (and the cone is not empty to rounding).
+#[inline]
+pub(crate) fn subtended(c: DVec3, r: f64, p: DVec3, outside: f64) -> Option<Subtended> {
+    let to = c - p;
+    let d2 = to.length_squared();
+    if !(d2 > outside.powi(2)) {
+        return None;
+    }
+    let d = d2.sqrt();
+    let sin2 = (r * r / d2).min(1.0);
+    let one_minus_cos = sin2 / (1.0 + (1.0 - sin2).sqrt());
+    (one_minus_cos > 0.0).then_some(Subtended {
+        axis: to / d,
+        dist: d,
+        sin2,
+        one_minus_cos,
+    })
 }
 
 /// An orthonormal frame `(t, b)` completing unit `n` (Duff et al. 2017).
@@ -110,13 +155,7 @@ impl AreaLight {
     /// The area light of an emissive instance (a sphere or a rectangle).
     pub fn new(inst: &Instance, radiance: Color) -> Self {
         let det = inst.xf.map_or(1.0, |x| x.matrix().determinant().abs());
-        let ball = match (&inst.shape, &inst.xf) {
-            (Shape::Sphere, None) => Some((DVec3::ZERO, 1.0)),
-            (Shape::Sphere, Some(x)) => {
-                similarity_scale(&x.matrix()).map(|r| (crate::real::dvec3(x.translation()), r))
-            }
-            _ => None,
-        };
+        let ball = sphere_ball(inst);
         let mut light = AreaLight {
             shape: inst.shape.clone(),
             xf: inst.xf,
@@ -141,16 +180,8 @@ impl AreaLight {
     #[inline]
     fn cone(&self, p: DVec3) -> Option<(DVec3, f64, f64)> {
         let (c, r) = self.ball?;
-        let to = c - p;
-        let d2 = to.length_squared();
         // Outside, with Mitsuba's margin (a point on the light itself is inside).
-        if !(d2 > (r * (1.0 - 1e-4)).powi(2)) {
-            return None;
-        }
-        let d = d2.sqrt();
-        let sin2 = (r * r / d2).min(1.0);
-        let one_minus_cos = sin2 / (1.0 + (1.0 - sin2).sqrt());
-        (one_minus_cos > 0.0).then_some((to / d, d, one_minus_cos))
+        subtended(c, r, p, r * (1.0 - 1e-4)).map(|s| (s.axis, s.dist, s.one_minus_cos))
     }
 
     /// Samples a point of the light as seen from `p`: a sphere placed by a similarity,

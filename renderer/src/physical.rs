@@ -102,6 +102,13 @@ struct Surface<'a> {
 }
 
 impl Surface<'_> {
+    /// The unit shading normal on the side of `wo` (the BSDFs are two-sided).
+    #[inline(always)]
+    fn facing(&self, wo: glam::DVec3) -> glam::DVec3 {
+        let side = if self.ns.dot(wo) >= 0.0 { 1.0 } else { -1.0 };
+        self.ns * side
+    }
+
     fn is_delta(&self) -> bool {
         self.m.model != MaterialModel::Diffuse
     }
@@ -119,8 +126,7 @@ impl Surface<'_> {
 
     #[inline(always)]
     fn sample(&self, wo: glam::DVec3, s: &mut PixelSampler) -> Option<BsdfSample> {
-        let side = if self.ns.dot(wo) >= 0.0 { 1.0 } else { -1.0 };
-        let n = self.ns * side;
+        let n = self.facing(wo);
         match self.m.model {
             MaterialModel::Diffuse => {
                 let dir = cosine_dir(n, s.next_2d());
@@ -222,9 +228,8 @@ impl<'a> PhysicalIntegrator<'a> {
         g: &AtVertex,
     ) -> Option<BsdfSample> {
         let u = smp.next_2d();
-        let side = if s.ns.dot(wo) >= 0.0 { 1.0 } else { -1.0 };
         let (dir, own) = match g.pick(u) {
-            Pick::Cosine(u1) => (cosine_dir(s.ns * side, (u1, u.1)), None),
+            Pick::Cosine(u1) => (cosine_dir(s.facing(wo), (u1, u.1)), None),
             Pick::Cone(k, dir) => (dir, Some(k)),
         };
         let (f, cos_pdf) = s.eval_diffuse(wo, dir);
@@ -448,8 +453,7 @@ impl<'a> PhysicalIntegrator<'a> {
             // next: a vertex two or more before the last.
             // (Built only in a scene with guides: a vertex of any other pays one test.)
             let g = if GUIDED && !s.is_delta() && depth + 1 < max_depth {
-                let side = if s.ns.dot(wo) >= 0.0 { 1.0 } else { -1.0 };
-                Some(AtVertex::new(&self.guides, dv(s.p), s.ns * side)).filter(|g| g.active())
+                Some(AtVertex::new(&self.guides, dv(s.p), s.facing(wo))).filter(|g| g.active())
             } else {
                 None
             };
@@ -495,27 +499,16 @@ fn guide_balls(scene: &Scene) -> Vec<Ball> {
         ) {
             continue;
         }
-        let ball = match (&inst.shape, &inst.xf) {
-            (crate::Shape::Sphere, None) => Some(Ball {
-                centre: glam::DVec3::ZERO,
-                radius: 1.0,
-            }),
-            (crate::Shape::Sphere, Some(x)) => {
-                crate::light::similarity_scale(&x.matrix()).map(|radius| Ball {
-                    centre: dv(x.translation()),
-                    radius,
+        let ball = crate::light::sphere_ball(inst)
+            .map(|(centre, radius)| Ball { centre, radius })
+            .or_else(|| {
+                let b = inst.bounds();
+                let (lo, hi) = (dv(b.min), dv(b.max));
+                (lo.is_finite() && hi.is_finite()).then(|| Ball {
+                    centre: (lo + hi) * 0.5,
+                    radius: (hi - lo).length() * 0.5,
                 })
-            }
-            _ => None,
-        }
-        .or_else(|| {
-            let b = inst.bounds();
-            let (lo, hi) = (dv(b.min), dv(b.max));
-            (lo.is_finite() && hi.is_finite()).then(|| Ball {
-                centre: (lo + hi) * 0.5,
-                radius: (hi - lo).length() * 0.5,
-            })
-        });
+            });
         match ball {
             Some(b) if b.radius > 0.0 && b.radius.is_finite() => balls.push(b),
             // An unbounded specular object (a mirror plane): no cone to aim at.
