@@ -1,6 +1,6 @@
 //! Closed-form checks of the physically based model: the white furnace, a point light over
-//! a diffuse plane, a square area light over a diffuse plane (both strategies of MIS), and
-//! the samplers' error against independent sampling.
+//! a diffuse plane, a square area light over a diffuse plane (both strategies of MIS), the
+//! samplers' error against independent sampling, and glass of ior 1 left invisible.
 
 use renderer::render::{render, Image, Options};
 use renderer::sampler::SamplerKind;
@@ -306,4 +306,53 @@ transform = [{ scale = 0.8 }, { rotate = { axis = [1, 2, 3], degrees = 40 } }, {
             );
         },
     );
+}
+
+/// Glass of ior 1 (the default) is invisible: through a slanted dielectric rectangle every
+/// pixel sees the environment unchanged, exactly. The refraction then crosses η = 1 while
+/// the Fresnel reflectance rounds to a tiny positive at these angles (cos θ = 0.32), so a
+/// path loop that told the reflection lobe by "η = 1" took every refraction for one and
+/// dropped what it met (the first vertex's reflection taken whole, renderer/src/physical.rs
+/// `reflected_emission`): black where the glass is.
+#[test]
+fn test06_index_matched_glass_is_invisible() {
+    for integrator in ["direct", "path"] {
+        let s = scene(&format!(
+            r#"
+[camera.look_at]
+from = [0, 1, -3]
+at = [0, 0, 0]
+up = [0, 1, 0]
+fov = 30
+[render]
+width = 8
+height = 8
+integrator = "{integrator}"
+[[lights]]
+type = "environment"
+color = [0.5, 0.5, 0.5]
+[materials.glass]
+model = "dielectric"
+[[objects]]
+type = "rectangle"
+material = "glass"
+transform = [{{ scale = 4 }}]
+"#
+        ));
+        let img = run(&s, 8);
+        let aov = img.aov.as_ref().unwrap();
+        let glass = aov.object_id.iter().filter(|&&id| id == 1.0).count();
+        assert!(glass > 16, "{integrator}: the rectangle covers {glass} pixels");
+        for (k, v) in img.rgb.iter().enumerate() {
+            assert_eq!(
+                *v,
+                0.5,
+                "{integrator}: pixel {} channel {} is {v}, not the environment's 0.5: \
+                 an ior-1 dielectric must change nothing (renderer/src/physical.rs, \
+                 the path loop's reflection test)",
+                k / 3,
+                k % 3
+            );
+        }
+    }
 }
