@@ -81,6 +81,14 @@ struct BsdfSample {
     reflected: bool,
 }
 
+/// The mirror direction of `wo` about unit `n`, given `cos_i = n·wo`: the sampled
+/// reflection of the conductor and the dielectric, and the ray `reflected_emission`
+/// traces (the same bits, so it meets what the sampled reflection meets).
+#[inline(always)]
+fn mirror(n: glam::DVec3, cos_i: f64, wo: glam::DVec3) -> glam::DVec3 {
+    n * (2.0 * cos_i) - wo
+}
+
 /// A cosine-weighted direction about unit `n` from the 2D sample `u`.
 #[inline(always)]
 fn cosine_dir(n: glam::DVec3, (u1, u2): (f64, f64)) -> glam::DVec3 {
@@ -164,7 +172,7 @@ impl Surface<'_> {
             MaterialModel::Conductor => {
                 s.next_1d();
                 Some(BsdfSample {
-                    dir: n * (2.0 * n.dot(wo)) - wo,
+                    dir: mirror(n, n.dot(wo), wo),
                     weight: rgb(self.m.color),
                     pdf: 0.0,
                     eta: 1.0,
@@ -176,7 +184,7 @@ impl Surface<'_> {
                 let (cos_i, eta, f, cos_t) = self.dielectric(n, wo);
                 if u < f {
                     Some(BsdfSample {
-                        dir: n * (2.0 * cos_i) - wo,
+                        dir: mirror(n, cos_i, wo),
                         weight: glam::DVec3::ONE,
                         pdf: 0.0,
                         eta: 1.0,
@@ -435,9 +443,13 @@ impl<'a> PhysicalIntegrator<'a> {
         if !(f > 0.0 && f < 1.0) {
             return None;
         }
-        let dir = n * (2.0 * cos_i) - wo;
+        let dir = mirror(n, cos_i, wo);
         let (ray, t_min) = self.spawn.ray(s.p, s.err, rv(s.ng), rv(dir));
-        let le = match self.scene.root.intersect_for_shading(&ray, t_min, Real::INFINITY) {
+        let le = match self
+            .scene
+            .root
+            .intersect_for_shading(&ray, t_min, Real::INFINITY)
+        {
             Some(hit) => self.emitted(&self.surface(&hit), -dv(ray.d).normalize()),
             None => self.env.unwrap_or(glam::DVec3::ZERO),
         };

@@ -143,9 +143,9 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
             rgb.par_chunks_mut(w * 3)
                 .zip(moment_rows)
                 .enumerate()
-                // One row per job: rayon otherwise cuts the rows into as many runs as
-                // it has threads times two and splits a run further only when another
-                // thread steals it, so one run of costly rows (an adaptive render's
+                // One row per job: rayon otherwise cuts the rows into a few runs (four
+                // on two threads) and splits a run further only when another thread
+                // steals it, so one run of costly rows (an adaptive render's
                 // noisy rows, a glass object) kept one thread busy while the other
                 // waited: an adaptive Cornell box's second pass ran 1.63x faster on two
                 // threads than on one, and 2.0x with a job per row.

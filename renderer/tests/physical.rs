@@ -342,7 +342,10 @@ transform = [{{ scale = 4 }}]
         let img = run(&s, 8);
         let aov = img.aov.as_ref().unwrap();
         let glass = aov.object_id.iter().filter(|&&id| id == 1.0).count();
-        assert!(glass > 16, "{integrator}: the rectangle covers {glass} pixels");
+        assert!(
+            glass > 16,
+            "{integrator}: the rectangle covers {glass} pixels"
+        );
         for (k, v) in img.rgb.iter().enumerate() {
             assert_eq!(
                 *v,
