@@ -214,8 +214,11 @@ MI_SAMPLERS = ["independent", "stratified", "multijitter", "ldsampler"]
 # The reference's sampler: stratified, so that its own noise is far below the errors it measures.
 REF_SAMPLER = "multijitter"
 # "X adaptive": sampler X with render.adaptive (renderer/docs/physical.md), whose counts are
-# the averages the pixels took.
-OURS_SAMPLERS = ["independent", "stratified", "sobol", "stratified adaptive", "sobol adaptive"]
+# the averages the pixels took; "X adaptive light": that, with LIGHT_PATHS light paths per
+# camera sample for the caustics seen directly (render.light_paths).
+OURS_SAMPLERS = ["independent", "stratified", "sobol", "stratified adaptive", "sobol adaptive",
+                 "sobol adaptive light"]
+LIGHT_PATHS = 0.5
 
 
 def crossing(pts, target):
@@ -251,9 +254,10 @@ def mitsuba_scene(name, size):
 
 def with_sampler(text, sampler):
     """A scene's text with our `sampler` set in its [render] table ("X adaptive": sampler X
-    with adaptive sampling on)."""
-    name, _, adaptive = sampler.partition(" ")
-    extra = "\nadaptive = true" if adaptive == "adaptive" else ""
+    with adaptive sampling on; "X adaptive light": and LIGHT_PATHS light paths)."""
+    name, *flags = sampler.split(" ")
+    extra = "\nadaptive = true" if "adaptive" in flags else ""
+    extra += f"\nlight_paths = {LIGHT_PATHS}" if "light" in flags else ""
     return re.sub(r"(?m)^\[render\]$", f'[render]\nsampler = "{name}"{extra}', text, count=1)
 
 
@@ -280,7 +284,8 @@ def mitsuba(outdir, quick):
           f"between the two around it (log-log), and its time is that count at the time per sample of its {top}-spp "
           "render. Mitsuba's best sampler for the scene is the one that gets there first, and so is ours "
           "(independent, stratified, sobol, and stratified and sobol with adaptive sampling, whose counts are the "
-          "averages the pixels took). Ratio = ours / best Mitsuba (below 1: we are faster); the last two columns are "
+          f"averages the pixels took, and sobol adaptive with {LIGHT_PATHS} light paths per camera sample for the "
+          "caustics seen directly, `light`). Ratio = ours / best Mitsuba (below 1: we are faster); the last two columns are "
           "our best without adaptive sampling and its ratio.", "",
           "| scene | ours Msamples/s | Mitsuba Msamples/s | our best sampler | its spp to target | its time (s) "
           "| best Mitsuba sampler | its spp | its time (s) | ratio | our best, not adaptive | its ratio |",
@@ -360,7 +365,7 @@ def mitsuba(outdir, quick):
         best = min(MI_SAMPLERS, key=lambda s: time_to(mi_pts[s])[1])
         best_spp, best_t = time_to(mi_pts[best])
         # The same without adaptive sampling: a fixed count in every pixel, as Mitsuba's.
-        plain = [s for s in OURS_SAMPLERS if not s.endswith(" adaptive")]
+        plain = [s for s in OURS_SAMPLERS if "adaptive" not in s.split(" ")]
         plain_best = min(plain, key=lambda s: time_to(ours_pts[s])[1])
         plain_t = time_to(ours_pts[plain_best])[1]
         px = size * size * top

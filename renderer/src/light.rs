@@ -262,6 +262,15 @@ impl AreaLight {
         self.pdf_area(n_world) as f64 * dist * dist / cos
     }
 
+    /// Bounds in render space.
+    pub(crate) fn bounds(&self) -> crate::aabb::Aabb {
+        let b = self.shape.bounds();
+        match &self.xf {
+            Some(x) => x.bounds(&b),
+            None => b,
+        }
+    }
+
     /// Surface area of the canonical shape.
     fn object_area(&self) -> Real {
         match self.shape {

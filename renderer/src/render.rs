@@ -138,7 +138,7 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
         Some(m) => m.chunks_mut(w * 6).collect(),
         None => (0..h).map(|_| -> &mut [f32] { &mut [] }).collect(),
     };
-    let (non_finite, samples): (usize, u64) = match pilot {
+    let (mut non_finite, samples): (usize, u64) = match pilot {
         None => (
             rgb.par_chunks_mut(w * 3)
                 .zip(moment_rows)
@@ -172,6 +172,11 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
         ),
         Some(pilot) => render_adaptive(&tracer, spp, pilot, &mut rgb, moment_rows, &bar),
     };
+    // The caustics seen directly, from the light paths (light_paths.rs), when they are on.
+    if let Some(light) = physical.light_image(spp) {
+        non_finite +=
+            crate::physical::fold_light_image(&light, &mut rgb, moments.as_deref_mut(), spp);
+    }
     if let Some(a) = aov.as_mut() {
         fill_aov(scene, a, w);
     }

@@ -1,6 +1,7 @@
 //! Closed-form checks of the physically based model: the white furnace, a point light over
 //! a diffuse plane, a square area light over a diffuse plane (both strategies of MIS), the
-//! samplers' error against independent sampling, and glass of ior 1 left invisible.
+//! samplers' error against independent sampling, glass of ior 1 left invisible, and light
+//! paths that leave the image's expectation as it was.
 
 use renderer::render::{render, Image, Options};
 use renderer::sampler::SamplerKind;
@@ -91,7 +92,11 @@ fn test01_white_furnace() {
             assert!(n > 40, "{n} interior pixels");
             for (c, want) in [0.4, 0.3, 0.2].into_iter().enumerate() {
                 let (mean, se) = mean_and_error(&img, spp, &pixels, c);
-                let z = (mean - want) / se.max(1e-12);
+                // The environment is sampled by the cosine (physical.rs, env_pdf), so each
+                // sample is ρ·L to rounding: the noise is then the f32 sum's rounding, at
+                // most spp ulps of the mean.
+                let rounding = want * spp as f64 * f32::EPSILON as f64;
+                let z = (mean - want) / se.hypot(rounding);
                 assert!(
                     z.abs() < 5.0,
                     "{integrator}/{sampler}, channel {c}: {mean} vs {want} (z = {z:.1})"
@@ -357,5 +362,101 @@ transform = [{{ scale = 4 }}]
                 k % 3
             );
         }
+    }
+}
+
+/// A glass and a mirror sphere on a floor under a square light: their caustics on the
+/// floor are seen directly (light_paths.rs).
+const CAUSTICS: &str = r#"
+[camera.look_at]
+from = [0, 2.5, -3]
+at = [0, -0.6, 0]
+up = [0, 1, 0]
+fov = 50
+[render]
+width = 24
+height = 24
+integrator = "path"
+max_depth = 6
+sampler = "sobol"
+light_paths = LIGHT_PATHS
+[materials.floor]
+model = "diffuse"
+color = [0.7, 0.7, 0.7]
+[materials.light]
+model = "diffuse"
+color = [0, 0, 0]
+radiance = [6, 6, 6]
+[materials.glass]
+model = "dielectric"
+ior = 1.5
+[materials.mirror]
+model = "conductor"
+color = [0.9, 0.9, 0.9]
+[[objects]]
+type = "rectangle"
+material = "floor"
+transform = [{ scale = 4 }, { translate = [0, -1, 0] }]
+[[objects]]
+type = "rectangle"
+material = "light"
+transform = [{ scale = 0.5 }, { rotate = { axis = [1, 0, 0], degrees = 180 } }, { translate = [0, 2, 0] }]
+[[objects]]
+type = "sphere"
+material = "glass"
+transform = [{ scale = 0.5 }, { translate = [-0.6, -0.3, 0] }]
+[[objects]]
+type = "sphere"
+material = "mirror"
+transform = [{ scale = 0.4 }, { translate = [0.7, -0.5, 0.2] }]
+"#;
+
+/// The sum over the image of channel `c`, and its standard error (the pixels' variances
+/// of their means from the second moments).
+fn image_sum(img: &Image, spp: u32, c: usize) -> (f64, f64) {
+    let pixels: Vec<usize> = (0..(img.width * img.height) as usize).collect();
+    let (mean, se) = mean_and_error(img, spp, &pixels, c);
+    let n = pixels.len() as f64;
+    (mean * n, se * n)
+}
+
+/// Light paths take the caustics seen directly over from the camera paths: the image's
+/// expectation must not change. The image with them (the camera paths' share and the
+/// light paths' sums, whose variance `fold` puts into the moments) agrees with the image
+/// without them within 5 standard errors; with both counting those caustics
+/// (`Fault::CausticsTwice`), it is brighter by their whole share, and the same test fails.
+#[test]
+fn test07_light_paths_keep_the_expectation() {
+    let spp = 1024;
+    let plain = run(&scene(&CAUSTICS.replace("LIGHT_PATHS", "0")), spp);
+    let with = scene(&CAUSTICS.replace("LIGHT_PATHS", "2"));
+    let light = run(&with, spp);
+    let twice = render(
+        &with,
+        &Options {
+            samples: Some(spp),
+            moments: true,
+            fault: Some(renderer::physical::Fault::CausticsTwice),
+            ..Options::default()
+        },
+    );
+    for c in 0..3 {
+        let (a, sa) = image_sum(&plain, spp, c);
+        let (b, sb) = image_sum(&light, spp, c);
+        let (t, st) = image_sum(&twice, spp, c);
+        let z = (b - a) / sa.hypot(sb);
+        assert!(
+            z.abs() < 5.0,
+            "channel {c}: the image sums {b} with light paths and {a} without (z = {z:.1}): \
+the light paths' estimate (renderer/src/light_paths.rs, the factor in its module docs) \
+or the camera paths' share (`caustic` in PhysicalIntegrator::path) is wrong"
+        );
+        // The caustics' share, counted twice: a test that cannot see it is no test.
+        let zt = (t - a) / sa.hypot(st);
+        assert!(
+            zt > 10.0 && t - b > 0.02 * a,
+            "channel {c}: with the caustics counted twice the image sum is {t} against {a} \
+(z = {zt:.1}): the scene's caustics seen directly are too faint for this test"
+        );
     }
 }

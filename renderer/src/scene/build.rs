@@ -67,6 +67,10 @@ the image with its AOVs could need {:.1} GB",
 /// classic model's recursion (with [`crate::shading::MAX_PASS_THROUGH`]) and every path.
 pub const MAX_DEPTH: u32 = 256;
 
+/// The largest `render.light_paths` (light paths per camera sample): more would take most
+/// of a render's time for the caustics alone.
+pub const MAX_LIGHT_PATHS: f64 = 16.0;
+
 /// Checks a sample count.
 pub fn check_samples(samples: u32) -> Result<(), String> {
     if samples == 0 {
@@ -176,6 +180,14 @@ it bounds the recursion of the classic model and the length of a path",
     if !(r.adc_bailout.is_finite() && r.adc_bailout >= 0.0) {
         return Err(at_render("adc_bailout", "must be finite and ≥ 0"));
     }
+    if !(r.light_paths.is_finite() && (0.0..=MAX_LIGHT_PATHS).contains(&r.light_paths)) {
+        return Err(at_render(
+            "light_paths",
+            &format!(
+                "must be a number from 0 to {MAX_LIGHT_PATHS} (light paths per camera sample)"
+            ),
+        ));
+    }
     let settings = Settings {
         width: r.width,
         height: r.height,
@@ -189,6 +201,7 @@ it bounds the recursion of the classic model and the length of a path",
         sampler: r.sampler,
         adaptive: r.adaptive,
         guides: r.guides,
+        light_paths: r.light_paths,
     };
     let classic = r.integrator == Integrator::Classic;
     let camera = build_camera(&desc.camera, r.width, r.height, &src)?;

@@ -183,6 +183,10 @@ pub struct RenderDesc {
     /// Aim some path directions at mirror and glass objects (on unless turned off).
     #[serde(default = "yes")]
     pub guides: bool,
+    /// Path integrator: light paths per camera sample for the caustics seen directly
+    /// (0, the default, traces none).
+    #[serde(default)]
+    pub light_paths: f64,
 }
 
 fn yes() -> bool {

@@ -30,6 +30,9 @@ pub struct Settings {
     pub adaptive: bool,
     /// Physical model: aim some continuation directions at specular objects (guide.rs).
     pub guides: bool,
+    /// Path integrator: light paths traced per camera sample for the caustics seen
+    /// directly (light_paths.rs); 0 turns them off.
+    pub light_paths: f64,
 }
 
 /// Light transport.
