@@ -295,7 +295,17 @@ impl AreaLight {
     /// A point uniform (in object space) on the light: world point and unnormalized world
     /// normal.
     pub(crate) fn sample(&self, u: (f64, f64)) -> (Vec3, Vec3) {
-        let (p, n) = match self.shape {
+        let (p, n) = self.canonical(u);
+        match &self.xf {
+            Some(x) => (x.point(p), x.normal(n)),
+            None => (p, n),
+        }
+    }
+
+    /// The canonical shape's point for `u` and its normal (object space).
+    #[inline]
+    fn canonical(&self, u: (f64, f64)) -> (Vec3, Vec3) {
+        match self.shape {
             Shape::Sphere => {
                 let z = 1.0 - 2.0 * u.0;
                 let r = (1.0 - z * z).max(0.0).sqrt();
@@ -304,10 +314,21 @@ impl AreaLight {
                 (v, v)
             }
             _ => (Self::rectangle_point(u), Vec3::Y),
-        };
+        }
+    }
+
+    /// [`AreaLight::sample`] with the sampled point's rounding-error bound (a light path
+    /// leaves the light from it, and must not meet the light itself again): a few ulps
+    /// of the canonical point, mapped by the transform with pbrt's rule.
+    pub(crate) fn sample_with_error(&self, u: (f64, f64)) -> (Vec3, Vec3, Vec3) {
+        let (p, n) = self.canonical(u);
+        let err = p.abs() * (4.0 * Real::EPSILON);
         match &self.xf {
-            Some(x) => (x.point(p), x.normal(n)),
-            None => (p, n),
+            Some(x) => {
+                let (q, e) = x.point_with_error(p, err);
+                (q, x.normal(n), e)
+            }
+            None => (p, n, err),
         }
     }
 

@@ -14,8 +14,10 @@
 //! leave exactly these paths out (their emission weighs 0 when the path so far is camera
 //! → D → S⁺ and the light is an area light), so each path of the image is counted by one
 //! of the two estimators: the expectation is unchanged. The partition is exact only when
-//! every specular surface lies in a ball and no light lies in one; otherwise, or for a
-//! camera that is not a pinhole (every camera here is one), the light paths are off.
+//! every specular surface lies in a ball and reflects about its geometric normal (no
+//! specular triangle or mesh, whose interpolated normals would need a correction at each
+//! specular vertex), and no light lies in a ball; otherwise the light paths are off.
+//! (Every camera here is a pinhole, which the connection to the eye assumes.)
 //!
 //! The estimate: a light path with throughput β (emitted radiance × cos / the densities of
 //! its point and direction, × the specular weights) reaching the diffuse point x from the
@@ -26,9 +28,13 @@
 //!
 //! where a_p is a pixel's area on the window and N the number of light paths: a pixel's
 //! value is the mean radiance over its window area, and a window area dA is E²/cos³θ dω at
-//! the eye, while dω = |n_g·ω_e| dA_x / d² at x. The refraction weights are the camera
-//! path's for the same crossing (η_l², η_l the ratio crossed in the light's direction),
-//! so that a path scores the same from either end.
+//! the eye, while dω = |n_g·ω_e| dA_x / d² at x. A refraction leaves β as it was (weight
+//! 1 for the lobe chosen with its probability): β carries power, which crossing an
+//! interface keeps, while the camera path's 1/η² is radiance's change of units (η²·cos
+//! dA dω is the same on both sides of the interface, so the two agree; pbrt's
+//! "importance" transport mode). A closed object's two crossings would hide an error
+//! here (η² and 1/η² cancel); a single interface does not (renderer/tests/physical.rs
+//! test08).
 //!
 //! Output stays deterministic: the paths are traced in chunks in parallel, each chunk's
 //! contributions kept in order in its own buffer, and the buffers added to the image in
@@ -42,6 +48,8 @@ use rayon::prelude::*;
 const CHUNK: u64 = 1024;
 /// Chunks traced between two merges into the image (their buffers are kept for reuse).
 const GROUP: usize = 64;
+/// Most light paths a render traces.
+const MAX_PATHS: u64 = 1 << 31;
 /// What keys the light paths' samples (a "pixel" no camera sample uses).
 const LIGHT_KEY: u64 = u64::MAX - 0x11_9a7b;
 
@@ -63,12 +71,14 @@ pub(super) struct LightPaths {
     ratio: f64,
 }
 
-/// The light paths' sums over a render: per pixel, the RGB sum of the contributions and
-/// the sums of their products (RR, GG, BB, RG, RB, GB), and the paths traced.
+/// The light paths' sums over a render: per pixel, the RGB sum of the contributions and,
+/// when asked for, the sums of their products (RR, GG, BB, RG, RB, GB); the paths traced,
+/// and the contributions left out for being non-finite.
 pub(crate) struct LightImage {
     pub sum: Vec<f64>,
-    pub sq: Vec<f64>,
+    pub sq: Option<Vec<f64>>,
     pub paths: u64,
+    pub non_finite: usize,
 }
 
 impl LightPaths {
@@ -82,9 +92,14 @@ impl LightPaths {
         {
             return None;
         }
-        let (balls, complete) = specular_balls(scene);
+        let (mut balls, complete) = specular_balls(scene);
         if !complete || balls.is_empty() || balls.len() > MAX_GUIDES {
             return None;
+        }
+        // A sphere is taken for one when its transform is a similarity to 1e-5
+        // (light::sphere_ball): grown a little, its ball holds the slightly uneven one.
+        for b in &mut balls {
+            b.radius *= 1.0 + 1e-4;
         }
         // Every light outside every ball: the cones seen from a light point are then
         // every direction that can meet a specular surface first.
@@ -140,15 +155,18 @@ impl LightPaths {
 
 impl PhysicalIntegrator<'_> {
     /// Traces the render's light paths (none when they are off): `spp` camera samples a
-    /// pixel.
-    pub(crate) fn light_image(&self, spp: u32) -> Option<LightImage> {
+    /// pixel; `moments`: also the sums of the contributions' products.
+    pub(crate) fn light_image(&self, spp: u32, moments: bool) -> Option<LightImage> {
         let lp = self.light.as_ref()?;
         let px = lp.cols as usize * lp.rows as usize;
+        // At most 2³¹ (a sample index and count of the samplers' u32, whose square root
+        // the stratified sampler squares).
         let paths = (lp.ratio * px as f64 * spp as f64)
             .round()
-            .clamp(1.0, u32::MAX as f64) as u64;
+            .clamp(1.0, MAX_PATHS as f64) as u64;
         let mut sum = vec![0.0; px * 3];
-        let mut sq = vec![0.0; px * 6];
+        let mut sq = moments.then(|| vec![0.0; px * 6]);
+        let mut non_finite = 0;
         let chunks = paths.div_ceil(CHUNK);
         let mut bufs: Vec<Vec<(usize, glam::DVec3)>> = vec![Vec::new(); GROUP];
         let mut first = 0u64;
@@ -175,21 +193,32 @@ impl PhysicalIntegrator<'_> {
                 });
             for buf in &bufs[..n] {
                 for &(i, c) in buf {
+                    if !c.is_finite() {
+                        non_finite += 1;
+                        continue;
+                    }
                     sum[3 * i] += c.x;
                     sum[3 * i + 1] += c.y;
                     sum[3 * i + 2] += c.z;
-                    let m = &mut sq[6 * i..6 * i + 6];
-                    m[0] += c.x * c.x;
-                    m[1] += c.y * c.y;
-                    m[2] += c.z * c.z;
-                    m[3] += c.x * c.y;
-                    m[4] += c.x * c.z;
-                    m[5] += c.y * c.z;
+                    if let Some(sq) = sq.as_mut() {
+                        let m = &mut sq[6 * i..6 * i + 6];
+                        m[0] += c.x * c.x;
+                        m[1] += c.y * c.y;
+                        m[2] += c.z * c.z;
+                        m[3] += c.x * c.y;
+                        m[4] += c.x * c.z;
+                        m[5] += c.y * c.z;
+                    }
                 }
             }
             first += n as u64;
         }
-        Some(LightImage { sum, sq, paths })
+        Some(LightImage {
+            sum,
+            sq,
+            paths,
+            non_finite,
+        })
     }
 
     /// One light path: the pixel it adds to and what it adds (times the path count).
@@ -201,7 +230,7 @@ impl PhysicalIntegrator<'_> {
             let k = (smp.next_1d() * lights.len() as f64) as usize;
             &lights[k.min(lights.len() - 1)]
         };
-        let (y, n_world) = light.sample(smp.next_2d());
+        let (y, n_world, err) = light.sample_with_error(smp.next_2d());
         let ny = dv(n_world).normalize();
         let pdf_area = light.pdf_area(n_world) as f64;
         let y = dv(y);
@@ -220,8 +249,6 @@ impl PhysicalIntegrator<'_> {
             return None;
         }
         let mut beta = rgb(light.radiance) * (cos_y * lights.len() as f64 / (pdf_area * pdf_dir));
-        // The sampled point's rounding: a few ulps of its coordinates.
-        let err = rv(y.abs() * (8.0 * Real::EPSILON as f64));
         let (mut ray, mut t_min) = self.spawn.ray(rv(y), err, rv(ny), rv(dir));
         let mut specular = 0;
         loop {
@@ -242,21 +269,20 @@ impl PhysicalIntegrator<'_> {
                 if f == glam::DVec3::ZERO || !(cos_in > 0.0) || self.occluded(&s, w_eye, dist) {
                     return None;
                 }
-                let c = beta * f * (s.ng.dot(w_eye).abs() / cos_in * we);
-                return c.is_finite().then_some((pixel, c));
+                // Non-finite contributions are counted where they are added.
+                return Some((pixel, beta * f * (s.ng.dot(w_eye).abs() / cos_in * we)));
             }
             specular += 1;
             if specular > lp.max_specular {
                 return None;
             }
             let bs = s.sample(w_in, smp)?;
-            // A refraction scores what the camera path's crossing of it scores: η_l²,
-            // not `sample`'s 1/η_l² (module docs).
-            beta *= if s.m.model == MaterialModel::Dielectric && !bs.reflected {
-                glam::DVec3::splat(bs.eta * bs.eta)
-            } else {
-                bs.weight
-            };
+            // A light path carries power, which a refraction keeps (the lobe is chosen
+            // with its probability): weight 1, not `sample`'s 1/η² for radiance (module
+            // docs).
+            if !(s.m.model == MaterialModel::Dielectric && !bs.reflected) {
+                beta *= bs.weight;
+            }
             if beta == glam::DVec3::ZERO {
                 return None;
             }
@@ -278,7 +304,7 @@ impl PhysicalIntegrator<'_> {
 /// mean to `rgb`, and, when `moments` (E[RR] … E[GB] per pixel, as the camera samples left
 /// them) are given, makes them such that (moments − mean·meanᵀ) / n is the variance of
 /// the sum of the two estimates. Returns the channels that came out non-finite (written
-/// as 0).
+/// as 0), with the light paths' contributions left out for being non-finite.
 pub(crate) fn fold(
     img: &LightImage,
     rgb: &mut [f32],
@@ -286,7 +312,7 @@ pub(crate) fn fold(
     n: u32,
 ) -> usize {
     let paths = img.paths as f64;
-    let mut bad = 0;
+    let mut bad = img.non_finite;
     let mut moments = moments;
     for k in 0..rgb.len() / 3 {
         let cam = [
@@ -300,11 +326,11 @@ pub(crate) fn fold(
             img.sum[3 * k + 2] / paths,
         ];
         let z = [cam[0] + y[0], cam[1] + y[1], cam[2] + y[2]];
-        if let Some(m) = moments.as_deref_mut() {
+        if let (Some(m), Some(sq)) = (moments.as_deref_mut(), img.sq.as_ref()) {
             const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
             for (q, &(a, b)) in PAIRS.iter().enumerate() {
                 // The light estimate's covariance: (E[CCᵀ] − YYᵀ) / N.
-                let cov = (img.sq[6 * k + q] / paths - y[a] * y[b]) / paths;
+                let cov = (sq[6 * k + q] / paths - y[a] * y[b]) / paths;
                 let v = m[6 * k + q] as f64 - cam[a] * cam[b] + z[a] * z[b] + n as f64 * cov;
                 m[6 * k + q] = if v.is_finite() { v as f32 } else { 0.0 };
             }

@@ -499,7 +499,9 @@ impl<'a> PhysicalIntegrator<'a> {
         Some(le * f)
     }
 
-    /// Radiance along a camera ray. (Always inlined, with the path loops and what they
+    /// Radiance along a camera ray. With light paths on (`render.light_paths`), the
+    /// caustics seen directly are left out: [`crate::render::render`] adds them from the
+    /// light paths. (Always inlined, with the path loops and what they
     /// call, into the render loop: each out-of-line call there cost a `direct` frame 1–3 %
     /// more instructions.)
     #[inline(always)]
@@ -678,15 +680,18 @@ fn guide_balls(scene: &Scene) -> Vec<Ball> {
 }
 
 /// The spheres around the top-level specular objects, and whether every specular surface
-/// of the scene lies in one (not when a specular object is unbounded, a mirror plane, nor
-/// when a definition placed by `type = "instance"` may hold one).
+/// of the scene lies in one and reflects about its geometric normal, as light paths need
+/// (light_paths.rs): not when a specular object is unbounded (a mirror plane), when a
+/// definition placed by `type = "instance"` may hold one, nor when a specular triangle or
+/// mesh may have interpolated normals (a light path would need the shading normal's
+/// correction at it).
 fn specular_balls(scene: &Scene) -> (Vec<Ball>, bool) {
+    use crate::aggregate::Shape;
     let mut balls = Vec::new();
     let mut complete = true;
     for inst in scene.root.in_scene_order() {
-        if matches!(inst.shape, crate::aggregate::Shape::Group(_)) {
+        if matches!(inst.shape, Shape::Group(_)) {
             complete = false;
-            continue;
         }
         let m = scene.material(inst.material);
         if !matches!(
@@ -694,6 +699,9 @@ fn specular_balls(scene: &Scene) -> (Vec<Ball>, bool) {
             MaterialModel::Conductor | MaterialModel::Dielectric
         ) {
             continue;
+        }
+        if matches!(inst.shape, Shape::Mesh(_) | Shape::Triangle(_)) {
+            complete = false;
         }
         let ball = crate::light::sphere_ball(inst)
             .map(|(centre, radius)| Ball { centre, radius })

@@ -173,7 +173,7 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
         Some(pilot) => render_adaptive(&tracer, spp, pilot, &mut rgb, moment_rows, &bar),
     };
     // The caustics seen directly, from the light paths (light_paths.rs), when they are on.
-    if let Some(light) = physical.light_image(spp) {
+    if let Some(light) = physical.light_image(spp, moments.is_some()) {
         non_finite +=
             crate::physical::fold_light_image(&light, &mut rgb, moments.as_deref_mut(), spp);
     }

@@ -427,9 +427,58 @@ fn image_sum(img: &Image, spp: u32, c: usize) -> (f64, f64) {
 /// (`Fault::CausticsTwice`), it is brighter by their whole share, and the same test fails.
 #[test]
 fn test07_light_paths_keep_the_expectation() {
+    light_paths_keep_the_expectation(CAUSTICS, "a glass and a mirror sphere");
+}
+
+/// A single glass interface (a rectangle whose inside, below it, is glass) between a
+/// square light and the floor: light paths cross it once, so a wrong refraction weight
+/// (η² where power needs 1) shows, where a sphere's two crossings cancel it.
+const PANE: &str = r#"
+[camera.look_at]
+from = [0, 0.2, -2.6]
+at = [0, -1, 0]
+up = [0, 1, 0]
+fov = 60
+[render]
+width = 24
+height = 24
+integrator = "path"
+max_depth = 4
+sampler = "sobol"
+light_paths = LIGHT_PATHS
+[materials.floor]
+model = "diffuse"
+color = [0.7, 0.7, 0.7]
+[materials.light]
+model = "diffuse"
+color = [0, 0, 0]
+radiance = [6, 6, 6]
+[materials.glass]
+model = "dielectric"
+ior = 1.5
+[[objects]]
+type = "rectangle"
+material = "floor"
+transform = [{ scale = 4 }, { translate = [0, -1, 0] }]
+[[objects]]
+type = "rectangle"
+material = "light"
+transform = [{ scale = 0.5 }, { rotate = { axis = [1, 0, 0], degrees = 180 } }, { translate = [0, 2, 0] }]
+[[objects]]
+type = "rectangle"
+material = "glass"
+transform = [{ scale = 0.8 }, { translate = [0, 0.5, 0] }]
+"#;
+
+#[test]
+fn test08_light_paths_through_one_interface_keep_the_expectation() {
+    light_paths_keep_the_expectation(PANE, "one glass interface");
+}
+
+fn light_paths_keep_the_expectation(text: &str, what: &str) {
     let spp = 1024;
-    let plain = run(&scene(&CAUSTICS.replace("LIGHT_PATHS", "0")), spp);
-    let with = scene(&CAUSTICS.replace("LIGHT_PATHS", "2"));
+    let plain = run(&scene(&text.replace("LIGHT_PATHS", "0")), spp);
+    let with = scene(&text.replace("LIGHT_PATHS", "2"));
     let light = run(&with, spp);
     let twice = render(
         &with,
@@ -447,7 +496,7 @@ fn test07_light_paths_keep_the_expectation() {
         let z = (b - a) / sa.hypot(sb);
         assert!(
             z.abs() < 5.0,
-            "channel {c}: the image sums {b} with light paths and {a} without (z = {z:.1}): \
+            "{what}, channel {c}: the image sums {b} with light paths and {a} without (z = {z:.1}): \
 the light paths' estimate (renderer/src/light_paths.rs, the factor in its module docs) \
 or the camera paths' share (`caustic` in PhysicalIntegrator::path) is wrong"
         );
@@ -455,8 +504,8 @@ or the camera paths' share (`caustic` in PhysicalIntegrator::path) is wrong"
         let zt = (t - a) / sa.hypot(st);
         assert!(
             zt > 10.0 && t - b > 0.02 * a,
-            "channel {c}: with the caustics counted twice the image sum is {t} against {a} \
-(z = {zt:.1}): the scene's caustics seen directly are too faint for this test"
+            "{what}, channel {c}: with the caustics counted twice the image sum is {t} against \
+{a} (z = {zt:.1}): the scene's caustics seen directly are too faint for this test"
         );
     }
 }
