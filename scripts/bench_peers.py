@@ -218,7 +218,7 @@ REF_SAMPLER = "multijitter"
 # camera sample for the caustics seen directly (render.light_paths).
 OURS_SAMPLERS = ["independent", "stratified", "sobol", "stratified adaptive", "sobol adaptive",
                  "sobol adaptive light"]
-LIGHT_PATHS = 0.5
+LIGHT_PATHS = 0.25
 
 
 def crossing(pts, target):

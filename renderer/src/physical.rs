@@ -617,7 +617,9 @@ impl<'a> PhysicalIntegrator<'a> {
             // Guides pay only when the path goes on after the specular object it meets
             // next: a vertex two or more before the last.
             // (Built only in a scene with guides: a vertex of any other pays one test.)
-            let g = if GUIDED && !s.is_delta() && depth + 1 < max_depth {
+            // Not at the first vertex when light paths are on: what a guided continuation
+            // from there finds through a specular object is theirs (light_paths.rs).
+            let g = if GUIDED && !s.is_delta() && depth + 1 < max_depth && !(LIGHT && depth == 1) {
                 Some(AtVertex::new(&self.guides, dv(s.p), s.facing(wo))).filter(|g| g.active())
             } else {
                 None
