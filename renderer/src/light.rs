@@ -60,6 +60,8 @@ pub struct AreaLight {
     /// ([`AreaLight::pdf_area`]). [`AreaLight::sample_from`] reads them rather than
     /// computing them per sample (the same bits).
     flat: Option<(DVec3, Real)>,
+    /// Bounds in render space (its instance's).
+    pub(crate) bounds: crate::aabb::Aabb,
 }
 
 /// The density of a sampled light point: per solid angle (a sphere's cone) or per area.
@@ -163,6 +165,7 @@ impl AreaLight {
             det,
             ball,
             flat: None,
+            bounds: inst.bounds(),
         };
         if !matches!(light.shape, Shape::Sphere) {
             let n_world = light.sample((0.5, 0.5)).1;
@@ -260,15 +263,6 @@ impl AreaLight {
             return 0.0;
         }
         self.pdf_area(n_world) as f64 * dist * dist / cos
-    }
-
-    /// Bounds in render space.
-    pub(crate) fn bounds(&self) -> crate::aabb::Aabb {
-        let b = self.shape.bounds();
-        match &self.xf {
-            Some(x) => x.bounds(&b),
-            None => b,
-        }
     }
 
     /// Surface area of the canonical shape.

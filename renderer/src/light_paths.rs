@@ -42,6 +42,7 @@
 
 use super::*;
 use crate::guide::SHARE;
+use crate::render::{moment_products, MOMENT_PAIRS};
 use rayon::prelude::*;
 
 /// Light paths a chunk traces (one rayon job).
@@ -104,9 +105,8 @@ impl LightPaths {
         // Every light outside every ball: the cones seen from a light point are then
         // every direction that can meet a specular surface first.
         for light in &scene.area_lights {
-            let b = light.bounds();
+            let (lo, hi) = (dv(light.bounds.min), dv(light.bounds.max));
             for ball in &balls {
-                let (lo, hi) = (dv(b.min), dv(b.max));
                 let nearest = ball.centre.clamp(lo, hi);
                 if !((nearest - ball.centre).length() > ball.radius) {
                     return None;
@@ -201,13 +201,10 @@ impl PhysicalIntegrator<'_> {
                     sum[3 * i + 1] += c.y;
                     sum[3 * i + 2] += c.z;
                     if let Some(sq) = sq.as_mut() {
-                        let m = &mut sq[6 * i..6 * i + 6];
-                        m[0] += c.x * c.x;
-                        m[1] += c.y * c.y;
-                        m[2] += c.z * c.z;
-                        m[3] += c.x * c.y;
-                        m[4] += c.x * c.z;
-                        m[5] += c.y * c.z;
+                        let products = moment_products(c.to_array());
+                        for (m, v) in sq[6 * i..6 * i + 6].iter_mut().zip(products) {
+                            *m += v;
+                        }
                     }
                 }
             }
@@ -327,8 +324,7 @@ pub(crate) fn fold(
         ];
         let z = [cam[0] + y[0], cam[1] + y[1], cam[2] + y[2]];
         if let (Some(m), Some(sq)) = (moments.as_deref_mut(), img.sq.as_ref()) {
-            const PAIRS: [(usize, usize); 6] = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
-            for (q, &(a, b)) in PAIRS.iter().enumerate() {
+            for (q, &(a, b)) in MOMENT_PAIRS.iter().enumerate() {
                 // The light estimate's covariance: (E[CCᵀ] − YYᵀ) / N.
                 let cov = (sq[6 * k + q] / paths - y[a] * y[b]) / paths;
                 let v = m[6 * k + q] as f64 - cam[a] * cam[b] + z[a] * z[b] + n as f64 * cov;

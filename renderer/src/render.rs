@@ -30,6 +30,17 @@ pub struct Aov {
     pub object_id: Vec<f32>,
 }
 
+/// The channel pairs of [`Image::moments`], in their order: RR, GG, BB, RG, RB, GB.
+pub(crate) const MOMENT_PAIRS: [(usize, usize); 6] =
+    [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
+
+/// An RGB value's products in the order of [`MOMENT_PAIRS`] (what a sample adds to a
+/// pixel's second moments).
+#[inline(always)]
+pub(crate) fn moment_products(c: [f64; 3]) -> [f64; 6] {
+    MOMENT_PAIRS.map(|(a, b)| c[a] * c[b])
+}
+
 /// A rendered image: linear RGB, row-major, top row first.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
@@ -495,11 +506,8 @@ impl RowTracer<'_> {
                 };
                 sum += c;
                 if sq_wanted {
-                    let (r, g, b) = (c.x as f64, c.y as f64, c.z as f64);
-                    for (m, v) in [r * r, g * g, b * b, r * g, r * b, g * b]
-                        .into_iter()
-                        .enumerate()
-                    {
+                    let products = moment_products([c.x as f64, c.y as f64, c.z as f64]);
+                    for (m, v) in products.into_iter().enumerate() {
                         sq[m] += v;
                     }
                 }
