@@ -30,8 +30,12 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TARGET = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
-RENDERER = os.path.join(TARGET, "release", "renderer")
-CONFORMANCE = os.path.join(TARGET, "release", "conformance")
+# scripts/bench-peers.sh points these at the profile-guided build (scripts/build-pgo.sh
+# --env) unless it is run with --plain.
+BIN_DIR = os.environ.get("PEERS_BIN_DIR", os.path.join(TARGET, "release"))
+RENDERER = os.path.join(BIN_DIR, "renderer")
+CONFORMANCE = os.path.join(BIN_DIR, "conformance")
+BUILD = "profile-guided (scripts/build-pgo.sh)" if "PEERS_BIN_DIR" in os.environ else "plain `cargo build --release`"
 
 
 def run_timed(argv, cwd=None):
@@ -51,8 +55,12 @@ def spread(ratios):
 
 
 def peers_bench(*args):
+    env = dict(os.environ)
+    if "PEERS_BENCH_TARGET_DIR" in env:
+        env["CARGO_TARGET_DIR"] = env["PEERS_BENCH_TARGET_DIR"]
+        env["RUSTFLAGS"] = env.get("PEERS_BENCH_RUSTFLAGS", "")
     out = subprocess.run(["cargo", "bench", "-q", "-p", "renderer", "--bench", "peers", "--", *args],
-                         cwd=ROOT, capture_output=True, text=True, check=True).stdout
+                         cwd=ROOT, capture_output=True, text=True, check=True, env=env).stdout
     return json.loads(out.strip().splitlines()[-1])
 
 
@@ -424,10 +432,11 @@ def main():
         only = sys.argv[sys.argv.index("--only") + 1].split(",")
     os.makedirs(outdir, exist_ok=True)
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
-    md = [f"Measured {when} by `scripts/bench-peers.sh{' --quick' if quick else ''}` on {os.cpu_count()} cores "
+    md = [f"Measured {when} by `scripts/bench-peers.sh{' --quick' if quick else ''}` on {os.cpu_count()} cores, "
+          f"ours the {BUILD} build "
           "(shared with other tenants: wall-clock figures move by up to 2x between runs; the ratios, measured "
           "in alternating pairs in one run, move much less).", ""]
-    data = {"measured": when, "quick": quick}
+    data = {"measured": when, "quick": quick, "build": BUILD}
     for name, fn in (("embree", embree), ("povray", povray), ("mitsuba", mitsuba), ("growth", growth)):
         if only and name not in only:
             continue
