@@ -3,7 +3,8 @@
 //! A budget of `spp` samples a pixel is spent in two passes. The pilot traces
 //! [`pilot`]`(spp)` samples in every pixel; the rest of the budget is then shared out
 //! among the pixels in proportion to the noise their neighbours' pilots showed (a pixel's
-//! standard deviation, estimated from the 8 pixels around it), with a part shared evenly.
+//! standard deviation, estimated from the pixels around it: [`radius`]), with a part
+//! shared evenly.
 //! The rest continues each pixel's sequence of samples (`independent`, `sobol`) or is a
 //! second set from an independent stream (`stratified`, whose strata need the count in
 //! advance; render.rs's `Pass::adaptive`). A pixel's value is the mean of all its
@@ -19,7 +20,7 @@
 //! independent of its own (every pixel's sampler is seeded by its own index), so its
 //! mean is unbiased for any count: E[mean | count] is the pixel's value. The share of
 //! the budget is normalized by the pixels that do not touch it either (the mean of the
-//! estimates outside its 3 × 3 block), so nothing in a pixel's count reads its own
+//! estimates outside its block of neighbours), so nothing in a pixel's count reads its own
 //! samples, not even through the rounding of that sum (it is added up from prefix and
 //! suffix sums that leave the block out). The total then matches the budget only
 //! approximately: a few per cent over where the noise is clustered in patches (their
@@ -37,6 +38,27 @@ use crate::material::Color;
 /// neighbours' pilots happened to show no noise (a caustic that no pilot path found)
 /// still gets some.
 pub const EVEN_SHARE: f64 = 0.25;
+
+/// The fewest pilot samples a pixel's neighbourhood holds: [`radius`].
+pub const NEIGHBOURHOOD_SAMPLES: u32 = 64;
+
+/// How far a pixel's neighbourhood reaches for a pilot of `pilot` samples a pixel: the
+/// smallest radius (1 is the 8 pixels around it, 2 the 24 of its 5 × 5 block) whose
+/// neighbours hold at least [`NEIGHBOURHOOD_SAMPLES`] pilot samples. A variance from fewer
+/// misses noisy pixels (a light's edge whose neighbours' pilots happened to be quiet);
+/// one from farther than it needs blurs the noise's picture. Measured at 256², `sobol`,
+/// six seeds each: with a pilot of 4 (16 spp) the 5 × 5 block cut the squared error by
+/// 5 % on the Cornell box and by 7 % on the glass and mirror scenes at 128², and on the
+/// area-light scene it took away the seeds whose error was 4–36 times the others' (a
+/// light's edge left with the even share); with a pilot of 8 or 16 it was 2–4 % worse
+/// than the 8 neighbours (renderer/docs/performance.md).
+pub fn radius(pilot: u32) -> usize {
+    let mut r = 1;
+    while (((2 * r + 1) * (2 * r + 1) - 1) as u32).saturating_mul(pilot) < NEIGHBOURHOOD_SAMPLES {
+        r += 1;
+    }
+    r
+}
 
 /// No pixel takes more than this many times the average extra samples.
 pub const MAX_FACTOR: f64 = 64.0;
@@ -83,24 +105,33 @@ pub fn cost(dimensions: u64, n: u32) -> f64 {
 }
 
 /// The extra samples of each pixel of a `w` × `h` image (row-major) for `extra` more
-/// samples a pixel on average, from each pixel's pilot `variance` and `cost` a sample.
+/// samples a pixel on average, from each pixel's pilot `variance` and `cost` a sample,
+/// with neighbourhoods of radius `r` ([`radius`]).
 ///
 /// Pixel p gets `extra · (EVEN_SHARE + (1 − EVEN_SHARE) · a_p / ā_p)`, at most
 /// `MAX_FACTOR · extra`, rounded up or down at random by a hash of its index (so the
 /// expected count is that number). Its score `a_p = σ_p / √c_p` is the count that minimizes the
 /// summed variance of the means at a fixed total time (Neyman's allocation with costs),
-/// where σ_p is the square root of the mean variance of the 8 pixels around p, and c_p
-/// their mean cost, not p's own; ā_p is the mean score of the pixels outside p's 3 × 3
-/// block (whose scores do not read p's pilot either). When ā_p is 0 (no noise anywhere
+/// where σ_p is the square root of the mean variance of the pixels around p (within `r`
+/// in both directions), and c_p their mean cost, not p's own; ā_p is the mean score of
+/// the pixels outside p's block of radius `r` (whose scores do not read p's pilot
+/// either). When ā_p is 0 (no noise anywhere
 /// else) the share is even.
-pub fn extra_counts(w: usize, h: usize, variance: &[f64], cost: &[f64], extra: u32) -> Vec<u32> {
+pub fn extra_counts(
+    w: usize,
+    h: usize,
+    r: usize,
+    variance: &[f64],
+    cost: &[f64],
+    extra: u32,
+) -> Vec<u32> {
     assert_eq!(variance.len(), w * h, "one variance a pixel");
     assert_eq!(cost.len(), w * h, "one cost a pixel");
     let score: Vec<f64> = (0..w * h)
         .map(|p| {
             let (i, j) = (p % w, p / w);
             let (mut v, mut c, mut n) = (0.0, 0.0, 0u32);
-            for (a, b) in block(i, j, w, h) {
+            for (a, b) in block(i, j, w, h, r) {
                 if (a, b) != (i, j) {
                     v += variance[b * w + a];
                     c += cost[b * w + a];
@@ -114,12 +145,12 @@ pub fn extra_counts(w: usize, h: usize, variance: &[f64], cost: &[f64], extra: u
             }
         })
         .collect();
-    let outside = Outside::new(w, h, &score);
+    let outside = Outside::new(w, h, r, &score);
     let extra = extra as f64;
     (0..w * h)
         .map(|p| {
             let (i, j) = (p % w, p / w);
-            let rest = w * h - block(i, j, w, h).count();
+            let rest = w * h - block(i, j, w, h, r).count();
             let mean = if rest > 0 {
                 outside.sum(i, j) / rest as f64
             } else {
@@ -143,7 +174,7 @@ fn round_up_chance(p: usize) -> f64 {
     (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }
 
-/// Sums of the scores outside each pixel's 3 × 3 block, each added up from the scores
+/// Sums of the scores outside each pixel's block of radius `r`, each added up from the scores
 /// outside the block alone: the rows above and below it (prefix and suffix sums over
 /// whole rows), and in each of its rows the columns left and right of it (prefix and
 /// suffix sums within the row). A total less the block's sum would read the block's
@@ -151,6 +182,7 @@ fn round_up_chance(p: usize) -> f64 {
 struct Outside {
     w: usize,
     h: usize,
+    r: usize,
     /// Sum of the rows before row b, for b in 0..=h.
     rows_before: Vec<f64>,
     /// Sum of the rows from row b on, for b in 0..=h.
@@ -162,7 +194,7 @@ struct Outside {
 }
 
 impl Outside {
-    fn new(w: usize, h: usize, score: &[f64]) -> Self {
+    fn new(w: usize, h: usize, r: usize, score: &[f64]) -> Self {
         let mut cols_before = vec![0.0; (w + 1) * h];
         let mut cols_from = vec![0.0; (w + 1) * h];
         for b in 0..h {
@@ -182,6 +214,7 @@ impl Outside {
         Outside {
             w,
             h,
+            r,
             rows_before,
             rows_from,
             cols_before,
@@ -189,10 +222,11 @@ impl Outside {
         }
     }
 
-    /// The sum of the scores outside the 3 × 3 block around (i, j).
+    /// The sum of the scores outside the block of radius `r` around (i, j).
     fn sum(&self, i: usize, j: usize) -> f64 {
-        let (a0, a1) = (i.saturating_sub(1), (i + 2).min(self.w));
-        let (b0, b1) = (j.saturating_sub(1), (j + 2).min(self.h));
+        let r = self.r;
+        let (a0, a1) = (i.saturating_sub(r), (i + r + 1).min(self.w));
+        let (b0, b1) = (j.saturating_sub(r), (j + r + 1).min(self.h));
         let mut s = self.rows_before[b0] + self.rows_from[b1];
         for b in b0..b1 {
             let at = b * (self.w + 1);
@@ -202,10 +236,10 @@ impl Outside {
     }
 }
 
-/// The pixels of the 3 × 3 block around (i, j) that lie in the image.
-fn block(i: usize, j: usize, w: usize, h: usize) -> impl Iterator<Item = (usize, usize)> {
-    let cols = i.saturating_sub(1)..(i + 2).min(w);
-    let rows = j.saturating_sub(1)..(j + 2).min(h);
+/// The pixels of the block of radius `r` around (i, j) (3 × 3 for 1) that lie in the image.
+fn block(i: usize, j: usize, w: usize, h: usize, r: usize) -> impl Iterator<Item = (usize, usize)> {
+    let cols = i.saturating_sub(r)..(i + r + 1).min(w);
+    let rows = j.saturating_sub(r)..(j + r + 1).min(h);
     rows.flat_map(move |b| cols.clone().map(move |a| (a, b)))
 }
 
@@ -240,31 +274,55 @@ mod tests {
 
     #[test]
     fn a_pixels_count_does_not_read_its_own_pilot() {
-        let (w, h) = (9, 7);
+        // Large enough that the spike's neighbourhood is a small part of the image.
+        let (w, h) = (15, 13);
         let cost = vec![1.0; w * h];
-        let quiet = extra_counts(w, h, &spike(w, h, 4, 3, 0.01), &cost, 12);
-        let loud = extra_counts(w, h, &spike(w, h, 4, 3, 100.0), &cost, 12);
-        let mut costly = cost.clone();
-        costly[3 * w + 4] = 50.0;
-        let dear = extra_counts(w, h, &spike(w, h, 4, 3, 0.01), &costly, 12);
-        // The noisy pixel's own count is the same; its neighbours' counts rise, and fall
-        // when the pixel is dear.
-        assert_eq!(quiet[3 * w + 4], loud[3 * w + 4]);
-        assert_eq!(quiet[3 * w + 4], dear[3 * w + 4]);
-        for (a, b) in block(4, 3, w, h).filter(|&q| q != (4, 3)) {
-            let p = b * w + a;
+        for r in 1..=2 {
+            let quiet = extra_counts(w, h, r, &spike(w, h, 7, 6, 0.01), &cost, 12);
+            let loud = extra_counts(w, h, r, &spike(w, h, 7, 6, 1e4), &cost, 12);
+            let mut costly = cost.clone();
+            costly[6 * w + 7] = 50.0;
+            let dear = extra_counts(w, h, r, &spike(w, h, 7, 6, 0.01), &costly, 12);
+            // The noisy pixel's own count is the same; its neighbours' counts rise, and
+            // fall when the pixel is dear.
+            assert_eq!(quiet[6 * w + 7], loud[6 * w + 7], "radius {r}");
+            assert_eq!(quiet[6 * w + 7], dear[6 * w + 7], "radius {r}");
+            for (a, b) in block(7, 6, w, h, r).filter(|&q| q != (7, 6)) {
+                let p = b * w + a;
+                assert!(
+                    loud[p] > 4 * quiet[p],
+                    "radius {r}, neighbour ({a}, {b}): {} vs {}",
+                    loud[p],
+                    quiet[p]
+                );
+                assert!(
+                    dear[p] < quiet[p],
+                    "radius {r}, neighbour ({a}, {b}): {} vs {}",
+                    dear[p],
+                    quiet[p]
+                );
+            }
+            // A pixel outside the block is not the spike's neighbour: its count does
+            // not rise.
             assert!(
-                loud[p] > 4 * quiet[p],
-                "neighbour ({a}, {b}): {} vs {}",
-                loud[p],
-                quiet[p]
+                loud[(6 * w + 7) - r - 1] <= quiet[(6 * w + 7) - r - 1],
+                "radius {r}"
             );
-            assert!(
-                dear[p] < quiet[p],
-                "neighbour ({a}, {b}): {} vs {}",
-                dear[p],
-                quiet[p]
-            );
+        }
+    }
+
+    #[test]
+    fn the_neighbourhood_holds_enough_pilot_samples() {
+        // 8 neighbours from a pilot of 8, the 24 of the 5 x 5 block below.
+        assert_eq!(radius(4), 2);
+        assert_eq!(radius(7), 2);
+        assert_eq!(radius(8), 1);
+        assert_eq!(radius(64), 1);
+        assert_eq!(radius(1), 4);
+        for pilot in 1..100 {
+            let r = radius(pilot) as u32;
+            assert!(((2 * r + 1).pow(2) - 1) * pilot >= NEIGHBOURHOOD_SAMPLES);
+            assert!(r == 1 || ((2 * r - 1).pow(2) - 1) * pilot < NEIGHBOURHOOD_SAMPLES);
         }
     }
 
@@ -275,7 +333,7 @@ mod tests {
             .map(|p| ((p * 7919) % 101) as f64 / 10.0)
             .collect();
         let cost: Vec<f64> = (0..w * h).map(|p| 1.0 + ((p * 31) % 7) as f64).collect();
-        let extra = extra_counts(w, h, &var, &cost, 24);
+        let extra = extra_counts(w, h, 1, &var, &cost, 24);
         let mean = extra.iter().map(|&k| k as f64).sum::<f64>() / (w * h) as f64;
         assert!((mean - 24.0).abs() < 0.5, "mean extra {mean}");
         // Every pixel keeps at least the even share.
@@ -287,51 +345,56 @@ mod tests {
     fn no_noise_shares_evenly_and_one_pixel_takes_at_most_its_cap() {
         let (w, h) = (40, 40);
         let cost = vec![1.0; w * h];
-        assert!(extra_counts(w, h, &vec![0.0; w * h], &cost, 10)
+        assert!(extra_counts(w, h, 1, &vec![0.0; w * h], &cost, 10)
             .iter()
             .all(|&k| k == 10));
         // All the noise around one pixel: it is capped.
         let mut var = vec![0.0; w * h];
-        for (a, b) in block(20, 20, w, h) {
+        for (a, b) in block(20, 20, w, h, 1) {
             var[b * w + a] = 1e9;
         }
         var[20 * w + 20] = 0.0;
-        let extra = extra_counts(w, h, &var, &cost, 10);
+        let extra = extra_counts(w, h, 1, &var, &cost, 10);
         assert_eq!(extra[20 * w + 20], (MAX_FACTOR * 10.0) as u32);
         // A 1 × 1 image has no neighbours.
-        assert_eq!(extra_counts(1, 1, &[5.0], &[1.0], 6), vec![6]);
+        assert_eq!(extra_counts(1, 1, 2, &[5.0], &[1.0], 6), vec![6]);
     }
 
     #[test]
     fn outside_sums_leave_the_block_out() {
         let (w, h) = (7, 5);
         let score: Vec<f64> = (0..w * h).map(|p| (p * p % 13) as f64 + 0.5).collect();
-        let outside = Outside::new(w, h, &score);
-        for j in 0..h {
-            for i in 0..w {
-                let inside: Vec<_> = block(i, j, w, h).collect();
-                let want: f64 = (0..w * h)
-                    .filter(|p| !inside.contains(&(p % w, p / w)))
-                    .map(|p| score[p])
-                    .sum();
-                assert_eq!(outside.sum(i, j), want, "pixel ({i}, {j})");
+        for r in 1..=2 {
+            let outside = Outside::new(w, h, r, &score);
+            for j in 0..h {
+                for i in 0..w {
+                    let inside: Vec<_> = block(i, j, w, h, r).collect();
+                    let want: f64 = (0..w * h)
+                        .filter(|p| !inside.contains(&(p % w, p / w)))
+                        .map(|p| score[p])
+                        .sum();
+                    assert_eq!(outside.sum(i, j), want, "radius {r}, pixel ({i}, {j})");
+                }
             }
+            // Changing a score inside the block leaves the sum's bits as they were.
+            let mut other = score.clone();
+            other[(2 + r) * w + 3 + r] = 1e17;
+            assert_eq!(
+                Outside::new(w, h, r, &other).sum(3, 2).to_bits(),
+                outside.sum(3, 2).to_bits(),
+                "radius {r}"
+            );
         }
-        // Changing a score inside the block leaves the sum's bits as they were.
-        let mut other = score.clone();
-        other[2 * w + 3] = 1e17;
-        assert_eq!(
-            Outside::new(w, h, &other).sum(3, 2).to_bits(),
-            outside.sum(3, 2).to_bits()
-        );
     }
 
     #[test]
     fn blocks_stop_at_the_image_edges() {
-        assert_eq!(block(0, 0, 3, 2).count(), 4);
-        assert_eq!(block(1, 1, 3, 3).count(), 9);
+        assert_eq!(block(0, 0, 3, 2, 1).count(), 4);
+        assert_eq!(block(1, 1, 3, 3, 1).count(), 9);
+        assert_eq!(block(1, 1, 9, 9, 2).count(), 16);
+        assert_eq!(block(4, 4, 9, 9, 2).count(), 25);
         assert_eq!(
-            block(2, 1, 3, 2).collect::<Vec<_>>(),
+            block(2, 1, 3, 2, 1).collect::<Vec<_>>(),
             vec![(1, 0), (2, 0), (1, 1), (2, 1)]
         );
     }

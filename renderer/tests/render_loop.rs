@@ -167,7 +167,8 @@ fn check_adaptive(file: &str, spp: u32, sampler: SamplerKind) {
         .iter()
         .map(|(.., d)| adaptive::cost(*d, pilot))
         .collect();
-    let extra = adaptive::extra_counts(w, h, &variance, &cost, spp - pilot);
+    let extra =
+        adaptive::extra_counts(w, h, adaptive::radius(pilot), &variance, &cost, spp - pilot);
     assert!(
         extra.iter().any(|&k| k != extra[0]),
         "{file}: every pixel got the same extra count, so this test shows nothing about uneven counts"
