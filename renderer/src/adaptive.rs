@@ -3,8 +3,8 @@
 //! A budget of `spp` samples a pixel is spent in two passes. The pilot traces
 //! [`pilot`]`(spp)` samples in every pixel; the rest of the budget is then shared out
 //! among the pixels in proportion to the noise their neighbours' pilots showed (a pixel's
-//! standard deviation, estimated from the pixels around it: [`radius`]), with a part
-//! shared evenly.
+//! standard deviation, estimated by the mean of the standard deviations of the pixels
+//! around it: [`radius`], [`scores`]), with a part shared evenly.
 //! The rest continues each pixel's sequence of samples (`independent`, `sobol`) or is a
 //! second set from an independent stream (`stratified`, whose strata need the count in
 //! advance; render.rs's `Pass::adaptive`). A pixel's value is the mean of all its
@@ -46,12 +46,12 @@ pub const NEIGHBOURHOOD_SAMPLES: u32 = 64;
 /// smallest radius (1 is the 8 pixels around it, 2 the 24 of its 5 × 5 block) whose
 /// neighbours hold at least [`NEIGHBOURHOOD_SAMPLES`] pilot samples. A variance from fewer
 /// misses noisy pixels (a light's edge whose neighbours' pilots happened to be quiet);
-/// one from farther than it needs blurs the noise's picture. Measured at 256², `sobol`,
-/// six seeds each: with a pilot of 4 (16 spp) the 5 × 5 block cut the squared error by
-/// 5 % on the Cornell box and by 7 % on the glass and mirror scenes at 128², and on the
-/// area-light scene it took away the seeds whose error was 4–36 times the others' (a
-/// light's edge left with the even share); with a pilot of 8 or 16 it was 2–4 % worse
-/// than the 8 neighbours (renderer/docs/performance.md).
+/// one from farther than it needs blurs the noise's picture. Measured with `sobol`, five
+/// or six seeds each, at 16 spp (a pilot of 4): the 5 × 5 block cut the squared error of
+/// the glass and mirror scenes by 11–12 % at 256² (7 % at 128²) and the Cornell box's by
+/// 5 % at 256², and on the area-light scene it took away the seeds whose error was 4–36
+/// times the others' (a light's edge left with the even share); with a pilot of 8 or 16
+/// it was 2–4 % worse than the 8 neighbours (renderer/docs/performance.md).
 pub fn radius(pilot: u32) -> usize {
     let mut r = 1;
     while (((2 * r + 1) * (2 * r + 1) - 1) as u32).saturating_mul(pilot) < NEIGHBOURHOOD_SAMPLES {
@@ -112,8 +112,8 @@ pub fn cost(dimensions: u64, n: u32) -> f64 {
 /// `MAX_FACTOR · extra`, rounded up or down at random by a hash of its index (so the
 /// expected count is that number). Its score `a_p = σ_p / √c_p` is the count that minimizes the
 /// summed variance of the means at a fixed total time (Neyman's allocation with costs),
-/// where σ_p is the square root of the mean variance of the pixels around p (within `r`
-/// in both directions), and c_p their mean cost, not p's own; ā_p is the mean score of
+/// where σ_p and c_p are estimated from the pixels around p (within `r` in both
+/// directions), not from p ([`scores`]); ā_p is the mean score of
 /// the pixels outside p's block of radius `r` (whose scores do not read p's pilot
 /// either). When ā_p is 0 (no noise anywhere
 /// else) the share is even.
@@ -125,26 +125,7 @@ pub fn extra_counts(
     cost: &[f64],
     extra: u32,
 ) -> Vec<u32> {
-    assert_eq!(variance.len(), w * h, "one variance a pixel");
-    assert_eq!(cost.len(), w * h, "one cost a pixel");
-    let score: Vec<f64> = (0..w * h)
-        .map(|p| {
-            let (i, j) = (p % w, p / w);
-            let (mut v, mut c, mut n) = (0.0, 0.0, 0u32);
-            for (a, b) in block(i, j, w, h, r) {
-                if (a, b) != (i, j) {
-                    v += variance[b * w + a];
-                    c += cost[b * w + a];
-                    n += 1;
-                }
-            }
-            if n > 0 && c > 0.0 {
-                (v / c).sqrt()
-            } else {
-                0.0
-            }
-        })
-        .collect();
+    let score = scores(w, h, r, variance, cost);
     let outside = Outside::new(w, h, r, &score);
     let extra = extra as f64;
     (0..w * h)
@@ -163,6 +144,39 @@ pub fn extra_counts(
             };
             let x = (extra * share).min(MAX_FACTOR * extra).min(MAX_EXTRA);
             (x + round_up_chance(p)).floor() as u32
+        })
+        .collect()
+}
+
+/// Each pixel's score σ/√c for [`extra_counts`], from its neighbours within `r` (not
+/// itself): σ the mean of their standard deviations, c the mean of their costs.
+///
+/// The mean of the standard deviations, not the root of the mean variance: each
+/// neighbour's variance comes from a few pilot samples (4 at 16 spp), and one bright
+/// sample makes it large, which the root of the mean passes on to the whole block. Five
+/// or six seeds at 256², 16 spp (64 for the second figure): squared error 0.94 (0.95) of
+/// the root of the mean's on the Cornell box, 0.96 (0.93) on the area light, 0.95 on the
+/// mirror, 1.06 (1.02) on the glass scene, whose caustic's rare bright paths are the
+/// outliers the root of the mean follows (renderer/docs/performance.md).
+pub(crate) fn scores(w: usize, h: usize, r: usize, variance: &[f64], cost: &[f64]) -> Vec<f64> {
+    assert_eq!(variance.len(), w * h, "one variance a pixel");
+    assert_eq!(cost.len(), w * h, "one cost a pixel");
+    (0..w * h)
+        .map(|p| {
+            let (i, j) = (p % w, p / w);
+            let (mut sd, mut c, mut n) = (0.0, 0.0, 0u32);
+            for (a, b) in block(i, j, w, h, r) {
+                if (a, b) != (i, j) {
+                    sd += variance[b * w + a].sqrt();
+                    c += cost[b * w + a];
+                    n += 1;
+                }
+            }
+            if n > 0 && c > 0.0 {
+                (sd / n as f64) / (c / n as f64).sqrt()
+            } else {
+                0.0
+            }
         })
         .collect()
 }
@@ -309,6 +323,18 @@ mod tests {
                 "radius {r}"
             );
         }
+    }
+
+    #[test]
+    fn scores_are_the_neighbours_mean_deviation_over_their_root_mean_cost() {
+        // 3 x 1: the middle pixel's neighbours have variances 16 and 0 and costs 1 and 3.
+        let s = scores(3, 1, 1, &[16.0, 1e6, 0.0], &[1.0, 1e6, 3.0]);
+        assert!((s[1] - 2.0 / 2f64.sqrt()).abs() < 1e-12, "{}", s[1]);
+        // The ends' one neighbour each: the middle pixel.
+        assert!((s[0] - 1e3 / 1e3).abs() < 1e-12 && s[0] == s[2], "{s:?}");
+        // No neighbours, or none with a cost: 0.
+        assert_eq!(scores(1, 1, 1, &[4.0], &[1.0]), vec![0.0]);
+        assert_eq!(scores(2, 1, 1, &[4.0, 4.0], &[0.0, 0.0]), vec![0.0, 0.0]);
     }
 
     #[test]
