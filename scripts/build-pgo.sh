@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # A profile-guided (PGO) release build of the renderer, the conformance tool and the peers
 # bench: the same code and the same output bits as `cargo build --release`, laid out and
-# inlined by what a training run measured (renderer/docs/performance.md, "Profile-guided
+# inlined by what a training run measured (renderer/docs/performance.md, "A profile-guided
 # build"). About 10 % faster on the physical scenes; the gate never uses it.
 #
 #   scripts/build-pgo.sh            builds into ${CARGO_TARGET_DIR:-target}/pgo/use
