@@ -13,7 +13,7 @@
 #                                           instead of the profile-guided build
 #
 # Ours is the profile-guided build of scripts/build-pgo.sh (the same bits, which that
-# script checks on every catalog scene; about 10 % faster; 6 more minutes), unless --plain.
+# script checks on every catalog and example scene; about 10 % faster; 6 more minutes), unless --plain.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 quick=""; only=""; write_docs=""; plain=""

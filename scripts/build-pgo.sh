@@ -15,7 +15,8 @@
 # light paths, and the peers bench's quick mesh and growth runs); the counts merged by
 # llvm-profdata (rustup's llvm-tools component, installed when missing: it must match
 # rustc's LLVM); the builds that read them; a check that the PGO renderer gives the plain
-# release build's bits on every catalog scene (it fails otherwise). The result is
+# release build's bits on every catalog and example scene (scripts/same-bits.sh's
+# comparison; it fails otherwise). The result is
 # target/pgo/use/release/renderer and .../conformance, and the peers bench in
 # target/pgo/bench, which `cargo bench` finds with the printed environment. About 6
 # minutes here.
@@ -98,23 +99,14 @@ RUSTFLAGS="$base_flags -Cprofile-use=$pgo/renderer.profdata" CARGO_TARGET_DIR="$
     cargo build -q --release -p renderer -p conformance
 RUSTFLAGS="$bench_flags" CARGO_TARGET_DIR="$pgo/bench" cargo bench -q -p renderer --bench peers --no-run 2>/dev/null
 
-# 5. The same bits as the plain build: every catalog scene, EXR with every AOV.
-echo "build-pgo: comparing the catalog's renders with the plain release build" >&2
+# 5. The same bits as the plain build: scripts/same-bits.sh's comparison, every catalog
+# and example scene at 1 and 7 spp (EXR with every AOV) and as PNG.
+echo "build-pgo: comparing the renders with the plain release build's" >&2
 cargo build -q --release -p renderer
-plain="$target/release/renderer"
-mkdir -p "$pgo/check"
-for scene in $(find conformance/scenes -name '*.toml' | sort); do
-    for b in plain use; do
-        bin="$plain"
-        [ "$b" = use ] && bin="$pgo/use/release/renderer"
-        "$bin" render "$scene" -o "$pgo/check/$b.exr" --aov --threads 2 2>>"$log"
-    done
-    if ! cmp -s "$pgo/check/plain.exr" "$pgo/check/use.exr"; then
-        echo "build-pgo: $scene renders other bits in the PGO build than in the plain one" >&2
-        exit 1
-    fi
-done
-echo "build-pgo: $pgo/use/release/renderer (the same bits on every catalog scene)" >&2
+. scripts/compare-renders.sh
+compare_renders "$target/release/renderer" "$pgo/use/release/renderer" "$pgo/check" \
+    "build-pgo: the PGO build renders other bits than the plain one" || exit 1
+echo "build-pgo: $pgo/use/release/renderer (the same bits in all $RENDERS renders)" >&2
 if [ -n "$print_env" ]; then
     printf 'export PEERS_BIN_DIR=%q\nexport PEERS_BENCH_TARGET_DIR=%q\nexport PEERS_BENCH_RUSTFLAGS=%q\n' \
         "$pgo/use/release" "$pgo/bench" "$bench_flags"

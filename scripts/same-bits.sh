@@ -21,32 +21,6 @@ work="$target/same-bits"
 base_build "$work" "$base"
 old="$work/target/release/renderer"
 new="$target/release/renderer"
-rm -rf "$work/old" "$work/new"
-mkdir -p "$work/old" "$work/new"
-differ=()
-n=0
-while IFS= read -r scene; do
-    name="$(echo "${scene#./}" | tr '/' '_')"
-    # EXR with every AOV at 1 and 7 spp, and the 8-bit sRGB PNG at 1 spp (its own
-    # encoding path: a change there leaves every EXR alone).
-    for run in "1 exr --aov" "7 exr --aov" "1 png"; do
-        read -r spp ext aov <<<"$run"
-        for side in old new; do
-            bin="$old"; [ "$side" = new ] && bin="$new"
-            if ! "$bin" render "$scene" -o "$work/$side/$name.$spp.$ext" ${aov:+"$aov"} \
-                --spp "$spp" --threads 2 >/dev/null 2>&1; then
-                differ+=("$scene ($spp spp, $ext): the $side renderer failed")
-            fi
-        done
-        if ! cmp -s "$work/old/$name.$spp.$ext" "$work/new/$name.$spp.$ext"; then
-            differ+=("$scene ($spp spp, $ext)")
-        fi
-    done
-    n=$((n + 1))
-done < <(find conformance/scenes renderer/scenes -name '*.toml' | sort)
-if [ "${#differ[@]}" -gt 0 ]; then
-    echo "DIFFERENT from $base in ${#differ[@]} of $((3 * n)) renders:" >&2
-    printf '  %s\n' "${differ[@]}" >&2
-    exit 1
-fi
-echo "same bits: $n scenes at 1 and 7 spp (EXR with AOVs) and at 1 spp (PNG), base $base" >&2
+. scripts/compare-renders.sh
+compare_renders "$old" "$new" "$work" "DIFFERENT from $base" || exit 1
+echo "same bits: $((RENDERS / 3)) scenes at 1 and 7 spp (EXR with AOVs) and at 1 spp (PNG), base $base" >&2

@@ -42,7 +42,7 @@
 
 use super::*;
 use crate::guide::SHARE;
-use crate::render::{moment_products, MOMENT_PAIRS};
+use crate::render::{add_moment_products, MOMENT_PAIRS};
 use rayon::prelude::*;
 
 /// Light paths a chunk traces (one rayon job).
@@ -201,10 +201,7 @@ impl PhysicalIntegrator<'_> {
                     sum[3 * i + 1] += c.y;
                     sum[3 * i + 2] += c.z;
                     if let Some(sq) = sq.as_mut() {
-                        let products = moment_products(c.to_array());
-                        for (m, v) in sq[6 * i..6 * i + 6].iter_mut().zip(products) {
-                            *m += v;
-                        }
+                        add_moment_products(&mut sq[6 * i..6 * i + 6], c.to_array());
                     }
                 }
             }

@@ -34,11 +34,13 @@ pub struct Aov {
 pub(crate) const MOMENT_PAIRS: [(usize, usize); 6] =
     [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)];
 
-/// An RGB value's products in the order of [`MOMENT_PAIRS`] (what a sample adds to a
-/// pixel's second moments).
+/// Adds an RGB value's products, in the order of [`MOMENT_PAIRS`], to the six sums of a
+/// pixel's second moments (what a sample, or a light path's contribution, adds).
 #[inline(always)]
-pub(crate) fn moment_products(c: [f64; 3]) -> [f64; 6] {
-    MOMENT_PAIRS.map(|(a, b)| c[a] * c[b])
+pub(crate) fn add_moment_products(sums: &mut [f64], c: [f64; 3]) {
+    for (m, &(a, b)) in sums.iter_mut().zip(&MOMENT_PAIRS) {
+        *m += c[a] * c[b];
+    }
 }
 
 /// A rendered image: linear RGB, row-major, top row first.
@@ -507,10 +509,7 @@ impl RowTracer<'_> {
                 };
                 sum += c;
                 if sq_wanted {
-                    let products = moment_products([c.x as f64, c.y as f64, c.z as f64]);
-                    for (m, v) in products.into_iter().enumerate() {
-                        sq[m] += v;
-                    }
+                    add_moment_products(&mut sq, [c.x as f64, c.y as f64, c.z as f64]);
                 }
                 if ps + 1 == pn {
                     // The pixel's last sample.
