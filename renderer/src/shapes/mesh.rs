@@ -369,7 +369,7 @@ impl Mesh {
             true,
             |first, count, tmax| {
                 for (_, pack, lanes) in self.leaf_packs(first, count) {
-                    if let Some((_, t, _)) = wr.hit4(pack, lanes, t_min, tmax) {
+                    if let Some(t) = wr.hit4_any(pack, lanes, t_min, tmax) {
                         return Visit::Hit(t);
                     }
                 }
