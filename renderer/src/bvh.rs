@@ -1370,6 +1370,67 @@ mod tests {
         assert!(ties > 5000, "the cases must include ties: {ties}");
     }
 
+    /// The split `best_split` finds among 16 bins (and among 32) partitions the set by
+    /// `bin_of::<WIDE_BINS>` into the two sides it priced: the SAH cost of the sides that
+    /// partition makes is the cost it returned.
+    #[test]
+    fn a_split_partitions_the_set_it_priced() {
+        let mut checked = 0;
+        for case in 0..200u64 {
+            let n = 8 + (case as usize * 37) % 300;
+            let boxes: Vec<Aabb> = (0..n as u64)
+                .map(|i| {
+                    let k = case * 1000 + i;
+                    let c = Vec3::new(u(k, 1), u(k, 2), u(k, 3)) * 10.0;
+                    Aabb {
+                        min: c,
+                        max: c + Vec3::new(u(k, 4), u(k, 5), u(k, 6)),
+                    }
+                })
+                .collect();
+            let centroids: Vec<Vec3> = boxes.iter().map(|b| b.centroid()).collect();
+            let idx: Vec<u32> = (0..n as u32).collect();
+            let (mut cb, mut parent) = (Aabb::EMPTY, Aabb::EMPTY);
+            for (b, c) in boxes.iter().zip(&centroids) {
+                parent = parent.union(b);
+                cb.grow(*c);
+            }
+            let set = Set {
+                idx: &idx,
+                boxes: &boxes,
+                centroids: &centroids,
+                cb: &cb,
+                parent: &parent,
+                traversal_cost: 1.0,
+            };
+            for (bins, best) in [
+                (BINS, best_split::<1, BINS>(&set)),
+                (WIDE_BINS, best_split::<1, WIDE_BINS>(&set)),
+            ] {
+                let (axis, pos, cost) = best.expect("distinct centroids");
+                let (mut l, mut r, mut nl) = (Aabb::EMPTY, Aabb::EMPTY, 0);
+                for (b, c) in boxes.iter().zip(&centroids) {
+                    if bin_of::<WIDE_BINS>(c[axis], &cb, axis) < pos {
+                        l = l.union(b);
+                        nl += 1;
+                    } else {
+                        r = r.union(b);
+                    }
+                }
+                let got =
+                    1.0 + (l.area() * nl as Real + r.area() * (n - nl) as Real) / parent.area();
+                assert!(
+                    (got - cost).abs() <= 1e-5 * cost,
+                    "case {case}, {bins} bins: the split at bin {pos} of {WIDE_BINS} on axis \
+                     {axis} was priced {cost} but partitions into sides that cost {got} \
+                     (bvh::best_split's bin in WIDE_BINS, bvh::bin_of)"
+                );
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 400);
+    }
+
     /// Every node's leaf mask marks exactly its leaf lanes, on a tree large enough for
     /// the top splits' wider binning (`WIDE_BINS`).
     #[test]
