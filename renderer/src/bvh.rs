@@ -742,16 +742,26 @@ unsafe fn ranks8(key: *const f32, mask: u32) -> ([u32; 8], u32, u32) {
     }
 }
 
+/// The lanes whose bits are set in `mask`, lowest first.
+#[inline(always)]
+fn lanes_of(mask: u32) -> impl Iterator<Item = usize> {
+    let mut m = mask;
+    std::iter::from_fn(move || {
+        (m != 0).then(|| {
+            let lane = m.trailing_zeros() as usize;
+            m &= m - 1;
+            lane
+        })
+    })
+}
+
 /// The lanes of `mask` by ascending `key`, ties in lane order (an insertion sort, stable),
 /// and how many there are.
 #[inline(always)]
 fn sorted_lanes<const W: usize>(mask: u32, key: &[Real; W]) -> ([usize; W], usize) {
     let mut lanes = [0usize; W];
     let mut k = 0;
-    let mut m = mask;
-    while m != 0 {
-        let lane = m.trailing_zeros() as usize;
-        m &= m - 1;
+    for lane in lanes_of(mask) {
         let mut j = k;
         while j > 0 && key[lanes[j - 1]] > key[lane] {
             lanes[j] = lanes[j - 1];
@@ -852,10 +862,7 @@ impl Walk {
             // The same bound as `Walk::push`'s (`stack_need`: `W − 1` a level), checked.
             assert!(base + k - 1 <= N, "traversal stack overflow");
             let slots = stack.as_mut_ptr();
-            let mut m = mask & !(1u32 << next);
-            while m != 0 {
-                let lane = m.trailing_zeros() as usize;
-                m &= m - 1;
+            for lane in lanes_of(mask & !(1u32 << next)) {
                 // The ranks of the lanes of `mask` are 0..k, one each (no key is NaN,
                 // asserted above), and `next` has rank 0: the others land on
                 // `base..base + k − 1`, each once, the farthest at the bottom.
@@ -899,10 +906,8 @@ impl Walk {
         let leaves = n.leaves as u32 & mask;
         let next = if leaves != 0 { leaves } else { mask }.trailing_zeros() as usize;
         let taken = !(1u32 << next);
-        for mut m in [mask & !leaves & taken, leaves & taken] {
-            while m != 0 {
-                let lane = m.trailing_zeros() as usize;
-                m &= m - 1;
+        for m in [mask & !leaves & taken, leaves & taken] {
+            for lane in lanes_of(m) {
                 Walk::push(stack, n, lane, near[lane]);
             }
         }
@@ -966,10 +971,7 @@ impl Walk {
             let n = &nodes[self.child as usize];
             let (near, mask) = n.hit(self);
             if ALL && self.eager {
-                let mut m = mask;
-                while m != 0 {
-                    let lane = m.trailing_zeros() as usize;
-                    m &= m - 1;
+                for lane in lanes_of(mask) {
                     ahead(n.child[lane], n.count[lane]);
                 }
             }
