@@ -1365,10 +1365,11 @@ mod tests {
     }
 
     /// `Walk::push_sorted` (by ranks on an AVX2 build), and `Walk::push_few` on three
-    /// lanes, take and stack the lanes in the insertion sort's order: on every mask of two or more of 8 lanes, 80 draws each of
-    /// keys from a few values (ties in every pattern, ±∞ among them; NaN in lanes outside
-    /// the mask, which must not count), the next lane and the stacked lanes, with their
-    /// children, counts and entry distances, are the same.
+    /// lanes, take and stack the lanes in the insertion sort's order: on every mask of two
+    /// or more of 8 lanes, 80 draws each of keys from a few values (ties in every pattern,
+    /// ±∞ among them; NaN in lanes outside the mask, which must not count), the next lane
+    /// and the stacked lanes, with their children, counts and entry distances, are the
+    /// same.
     #[test]
     fn pushed_lanes_pop_in_the_sorted_order() {
         let values = [
@@ -1595,7 +1596,7 @@ mod tests {
     /// The node test in SIMD lanes (SSE at 4, AVX at 8) gives the bits of the lane loop,
     /// on rays that cross boxes, miss them, run along a box's plane with a zero direction
     /// component (the NaN products the test must ignore), start on a plane, or pass
-    /// through a corner.
+    /// through a corner; and neither reports a lane past the node's children.
     fn simd_matches_lanes<const W: usize>() {
         let mut seen = [0usize; 3];
         for case in 0..4000u64 {
@@ -1615,7 +1616,7 @@ mod tests {
             node.set_boxes(&boxes[..lanes]);
             let mut o = Vec3::new(u(case, 100), u(case, 101), u(case, 102)) * 6.0 - 3.0;
             let mut d = Vec3::new(u(case, 103), u(case, 104), u(case, 105)) * 2.0 - 1.0;
-            match case % 5 {
+            match case % 6 {
                 // A zero (or negative zero) direction component, the origin on a plane.
                 1 => {
                     d.x = if case % 8 == 1 { 0.0 } else { -0.0 };
@@ -1630,6 +1631,8 @@ mod tests {
                 // Through a corner: entry and exit meet there, up to rounding, which the
                 // far distance's inflation must absorb in both tests.
                 4 => d = Vec3::new(boxes[0].max.x, boxes[0].min.y, boxes[0].max.z) - o,
+                // Through the world's origin, where a lane left zeroed would have a box.
+                5 => d = -o,
                 _ => {}
             }
             let w = Walk::new(&Ray::new(o, d), 0.0, 4.0 * u(case, 106) + 0.5, true);
@@ -1647,6 +1650,12 @@ mod tests {
                      Node::hit_lanes"
                 );
             }
+            assert_eq!(
+                simd.1 >> lanes,
+                0,
+                "case {case}: the node test reports a lane past the node's {lanes} children \
+                 (their empty boxes, Node::EMPTY, must never be overlapped)"
+            );
             seen[(simd.1 != 0) as usize] += 1;
             seen[2] += (simd.1 != 0 && simd.1 != (1 << lanes) - 1) as usize;
         }
