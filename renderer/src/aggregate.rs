@@ -13,7 +13,7 @@
 //! instances that use it.
 
 use crate::aabb::Aabb;
-use crate::bvh::{prefetch, Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
+use crate::bvh::{Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
 pub use crate::hit::{Hit, INHERIT};
 use crate::ray::Ray;
 use crate::real::{Mat3, Real, Vec3};
@@ -598,9 +598,7 @@ impl Aggregate {
                 t_min,
                 bound,
                 |r, k, tmax| self.visit(k, &rays[r], t_min, tmax, &mut best[r]),
-                |first, count| {
-                    prefetch(&self.leads[first as usize..first as usize + count as usize])
-                },
+                |first| self.leads.as_ptr().wrapping_add(first as usize).cast(),
             );
         } else {
             for (r, ray) in rays.iter().enumerate() {

@@ -836,7 +836,7 @@ fn visit_every_leaf<const W: usize>(n: usize) {
                 seen[r][order[i as usize]] += 1;
                 Visit::Miss
             },
-            |_, _| {},
+            |_| std::ptr::null(),
         );
         for (r, s) in seen.iter().enumerate() {
             assert!(

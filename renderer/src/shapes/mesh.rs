@@ -3,7 +3,7 @@
 
 use super::triangle::{surface, TriPack, WoopRay};
 use crate::aabb::Aabb;
-use crate::bvh::{prefetch, Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
+use crate::bvh::{Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
 use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{Real, Vec2, Vec3};
@@ -232,7 +232,7 @@ impl Mesh {
             t_max,
             false,
             |first, count, tmax| self.visit_leaf(&wr, first, count, t_min, tmax, &mut best),
-            |first, count| self.leaf_ahead(first, count),
+            |first| self.leaf_at(first),
         );
         best.map(|c| self.finish(c))
     }
@@ -267,25 +267,19 @@ impl Mesh {
             |r, first, count, tmax| {
                 self.visit_leaf(&wrs[r], first, count, t_min, tmax, &mut best[r])
             },
-            |first, count| self.leaf_ahead(first, count),
+            |first| self.leaf_at(first),
         );
         for (o, b) in out.iter_mut().zip(best) {
             *o = b.map(|c| self.finish(c));
         }
     }
 
-    /// Asks for the packs of the leaf at slots `first..` ahead of its test: one or two
-    /// (the SAH makes leaves of at most two packs; the rare larger leaf, of coincident
-    /// centroids or past the depth limit, gets its first two), three cache lines each
-    /// with no loop (a pack is 144 bytes at a multiple of 16). 40 % of the benchmark
-    /// mesh's leaves have two packs.
+    /// Where the packs of the leaf at slots `first..` start, for the walk's prefetch
+    /// ahead of its test (a leaf has one or two packs; the rare larger leaf, of
+    /// coincident centroids or past the depth limit, gets its first two).
     #[inline(always)]
-    fn leaf_ahead(&self, first: u32, count: u8) {
-        let first = first as usize / 4;
-        prefetch(&self.packs[first]);
-        if count > 4 {
-            prefetch(&self.packs[first + 1]);
-        }
+    fn leaf_at(&self, first: u32) -> *const u8 {
+        self.packs.as_ptr().wrapping_add(first as usize / 4).cast()
     }
 
     /// Whether [`Mesh::intersect_batch`] walks rays together: whether the tree and the
@@ -375,7 +369,7 @@ impl Mesh {
                 }
                 Visit::Miss
             },
-            |first, count| self.leaf_ahead(first, count),
+            |first| self.leaf_at(first),
         )
     }
 }
