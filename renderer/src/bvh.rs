@@ -943,10 +943,7 @@ impl Walk {
                 };
             }
         }
-        for &lane in l[1..].iter().rev() {
-            Walk::push(stack, n, lane, near[lane]);
-        }
-        l[0]
+        Walk::take_first(stack, n, &l, near)
     }
 
     /// For a search for any hit, of the lanes of `mask` (three or more): returns the
@@ -987,10 +984,23 @@ impl Walk {
         near: &[Real; W],
     ) -> usize {
         let (lanes, k) = sorted_lanes(mask, key);
-        for &lane in lanes[1..k].iter().rev() {
+        Walk::take_first(stack, n, &lanes[..k], near)
+    }
+
+    /// Of `sorted` (lanes of `n` in the order to take them, at least one), returns the
+    /// first and pushes the others, entered at `near`, the last first, so that they pop
+    /// in that order.
+    #[inline(always)]
+    fn take_first<const N: usize, const W: usize>(
+        stack: &mut ArrayVec<Entry, N>,
+        n: &Node<W>,
+        sorted: &[usize],
+        near: &[Real; W],
+    ) -> usize {
+        for &lane in sorted[1..].iter().rev() {
             Walk::push(stack, n, lane, near[lane]);
         }
-        lanes[0]
+        sorted[0]
     }
 
     /// A walk of `ray` over `(t_min, t_max)`; `eager` as [`Walk::eager`] starts: true for
