@@ -671,9 +671,11 @@ pub const INTERLEAVE_ABOVE: usize = 1 << 20;
 pub const BATCH: usize = 16;
 
 /// Cache lines a prefetch of a child asks for: a node is four (256 bytes at 8 lanes), a
-/// mesh leaf of two packs up to five (288 bytes at a multiple of 16), of one pack three,
-/// and the instance records of a leaf (32 bytes each) one or two. As many whatever the
-/// child is, so that the walk does not branch on it (`Bvh::ahead`).
+/// mesh leaf of two packs five or six (288 bytes at a multiple of 16: six when the first
+/// pack starts 48 bytes into a line, and then the sixth, the second pack's last 16
+/// bytes, is not asked for), of one pack three, and the instance records of a leaf (32
+/// bytes each) one or two. As many whatever the child is, so that the walk does not
+/// branch on it (`Bvh::ahead`).
 const AHEAD_LINES: usize = 5;
 
 /// Asks the processor to start loading the [`AHEAD_LINES`] cache lines from the one that

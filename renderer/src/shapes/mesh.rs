@@ -275,8 +275,10 @@ impl Mesh {
     }
 
     /// Where the packs of the leaf at slots `first..` start, for the walk's prefetch
-    /// ahead of its test (a leaf has one or two packs; the rare larger leaf, of
-    /// coincident centroids or past the depth limit, gets its first two).
+    /// ahead of its test (a leaf has one or two packs; the prefetch's five lines cover
+    /// them but for the second pack's last 16 bytes when the first starts 48 bytes into
+    /// a line; the rare larger leaf, of coincident centroids or past the depth limit,
+    /// gets about its first two).
     #[inline(always)]
     fn leaf_at(&self, first: u32) -> *const u8 {
         self.packs.as_ptr().wrapping_add(first as usize / 4).cast()
