@@ -253,6 +253,38 @@ def crossing(pts, target):
     return spp * (e / target) ** 2
 
 
+def refine(pts, target, measure, counts_between, rounds=3):
+    """The error ladder `pts` [(spp, error)] with the counts next to its crossing of
+    `target` measured too, ascending. The log-log line between two ladder counts is a
+    model, and a poor one where a sampler changes its regime between them: our adaptive
+    sampling has no pilot below 8 spp and renders every pixel alike, so its 4-spp error
+    lies on the plain sampler's curve and its 16-spp error on the adaptive one's, and the
+    line between them put the Cornell box's crossing at 14.6 spp where renders at 13 and
+    14 spp measured it at 13.5. Each round takes the two measured counts around the
+    crossing (0 below the first) and measures, among the counts the sampler can take
+    strictly between them, the nearest on either side of the crossing; it stops when none
+    is left, so the crossing ends between two neighbouring counts the sampler can take
+    (or after `rounds` rounds). A crossing beyond the ladder's last count is left
+    extrapolated. `measure(spp)` renders at `spp` and returns (the count taken, error);
+    `counts_between(lo, hi)` lists the counts to ask for whose taken counts lie strictly
+    between lo and hi, ascending by the count taken."""
+    pts = sorted(pts)
+    for _ in range(rounds):
+        spp = crossing(pts, target)
+        lo = max([n for n, _ in pts if n <= spp], default=0)
+        hi = min([n for n, _ in pts if n > spp], default=None)
+        if hi is None:
+            break
+        inner = counts_between(lo, hi)
+        below = [c for c, taken in inner if taken <= spp]
+        above = [c for c, taken in inner if taken > spp]
+        new = below[-1:] + above[:1]
+        if not new:
+            break
+        pts = sorted(pts + [measure(c) for c in new])
+    return pts
+
+
 def mitsuba_scene(name, size):
     """Catalog scene NAME of conformance/scenes/mitsuba as text, at size x size pixels."""
     text = open(os.path.join(ROOT, "conformance/scenes/mitsuba", name + ".toml")).read()
@@ -288,17 +320,22 @@ def mitsuba(outdir, quick):
           f"Time to RMSE: the time each needs to reach the RMSE of Mitsuba's {top}-spp independent image. Errors are "
           f"the images' own: taken against the mean of two {ref_spp}-spp Mitsuba `{REF_SAMPLER}` references (seeds 7 "
           "and 8), with the references' own noise (a quarter of their mean squared difference) taken off. Each "
-          f"sampler renders at {', '.join(map(str, ladder))} spp (the counts each really takes); the count where its error reaches the target is interpolated "
-          f"between the two around it (log-log), and its time is that count at the time per sample of its {top}-spp "
+          f"sampler renders at {', '.join(map(str, ladder))} spp (the counts each really takes), then, up to three "
+          "times, at the counts it can take nearest the crossing on either side (so the crossing ends between two "
+          "neighbouring counts it can take: our adaptive sampling has no pilot below 8 spp, so the line from the "
+          "4-spp to the 16-spp count joins two regimes); the count where its error reaches the target is interpolated "
+          f"between the two measured around it (log-log), and its time is that count at the time per sample of its {top}-spp "
           "render. Mitsuba's best sampler for the scene is the one that gets there first, and so is ours "
           "(independent, stratified, sobol, and stratified and sobol with adaptive sampling, whose counts are the "
           f"averages the pixels took, and sobol adaptive with {LIGHT_PATHS} light paths per camera sample for the "
           "caustics seen directly, `light`, in the scenes where they are on: elsewhere it renders sobol adaptive's "
           "bits and is left out). Ratio = ours / best Mitsuba (below 1: we are faster); the last two columns are "
-          "our best without adaptive sampling and its ratio.", "",
+          "our best without adaptive sampling and its ratio; the last, the ratio the ladder's counts alone gave "
+          "(the same samplers).", "",
           "| scene | ours Msamples/s | Mitsuba Msamples/s | our best sampler | its spp to target | its time (s) "
-          "| best Mitsuba sampler | its spp | its time (s) | ratio | our best, not adaptive | its ratio |",
-          "|---|---:|---:|---|---:|---:|---|---:|---:|---:|---|---:|"]
+          "| best Mitsuba sampler | its spp | its time (s) | ratio | our best, not adaptive | its ratio "
+          "| ladder alone |",
+          "|---|---:|---:|---|---:|---:|---|---:|---:|---:|---|---:|---:|"]
     rows = []
     for name in MI_SCENES:
         text = mitsuba_scene(name, size)
@@ -359,6 +396,28 @@ def mitsuba(outdir, quick):
                 pts.append((n, t, own(img)))
             return pts
 
+        def ours_between(lo, hi):
+            # Our renders take the count asked for (adaptive ones on average, to 0.1 %).
+            return [(c, c) for c in range(round(lo) + 1, round(hi))]
+
+        def mi_between(sampler):
+            # Mitsuba rounds some samplers' counts up (stratified to a square, ldsampler to
+            # a power of two, multijitter to a multiple of four at these sizes).
+            def between(lo, hi):
+                taken = {}
+                for c in range(int(lo) + 1, int(math.ceil(hi))):
+                    n = mi_count(sampler, c)
+                    if lo < n < hi:
+                        taken.setdefault(n, c)
+                return [(c, n) for n, c in sorted(taken.items())]
+            return between
+
+        def measured(render):
+            def measure(spp):
+                _, img, n = render(spp)
+                return n, own(img)
+            return measure
+
         # Ours and Mitsuba alternate sampler by sampler, so a slow phase of the machine
         # falls on both.
         ours_pts, mi_pts = {}, {}
@@ -376,30 +435,47 @@ def mitsuba(outdir, quick):
         candidates = [s for s in OURS_SAMPLERS
                       if not (s.endswith(" light") and same_images(s, s[:-len(" light")]))]
 
-        def time_to(pts):
-            spp = crossing([(n, e) for n, _, e in pts], target)
+        # Each sampler's errors next to its crossing measured, not read off the ladder's
+        # line (`refine`); the time a sample stays its top count's.
+        ours_err = {s: refine([(n, e) for n, _, e in ours_pts[s]], target,
+                              measured(lambda spp, s=s: ours_render(s, spp)), ours_between)
+                    for s in candidates}
+        mi_err = {s: refine([(n, e) for n, _, e in mi_pts[s]], target,
+                            measured(lambda spp, s=s: mi_render(s, spp)), mi_between(s))
+                  for s in MI_SAMPLERS}
+
+        def time_to(pts, err):
+            spp = crossing(err, target)
             return spp, spp * pts[-1][1] / pts[-1][0]
 
-        ours_best = min(candidates, key=lambda s: time_to(ours_pts[s])[1])
-        ours_spp, ours_t = time_to(ours_pts[ours_best])
-        best = min(MI_SAMPLERS, key=lambda s: time_to(mi_pts[s])[1])
-        best_spp, best_t = time_to(mi_pts[best])
+        ours_best = min(candidates, key=lambda s: time_to(ours_pts[s], ours_err[s])[1])
+        ours_spp, ours_t = time_to(ours_pts[ours_best], ours_err[ours_best])
+        best = min(MI_SAMPLERS, key=lambda s: time_to(mi_pts[s], mi_err[s])[1])
+        best_spp, best_t = time_to(mi_pts[best], mi_err[best])
         # The same without adaptive sampling: a fixed count in every pixel, as Mitsuba's.
         plain = [s for s in OURS_SAMPLERS if "adaptive" not in s.split(" ")]
-        plain_best = min(plain, key=lambda s: time_to(ours_pts[s])[1])
-        plain_t = time_to(ours_pts[plain_best])[1]
+        plain_best = min(plain, key=lambda s: time_to(ours_pts[s], ours_err[s])[1])
+        plain_t = time_to(ours_pts[plain_best], ours_err[plain_best])[1]
         px = size * size * top
         ours_rate = px / ours_pts["independent"][-1][1] / 1e6
         mi_rate = px / mi_pts["independent"][-1][1] / 1e6
-        errors = {f"ours {s}": [(n, e) for n, _, e in ours_pts[s]] for s in OURS_SAMPLERS}
-        errors.update({f"mitsuba {s}": [(n, e) for n, _, e in mi_pts[s]] for s in MI_SAMPLERS})
+        # Every count measured (the ladder's and the refinement's), and what the ladder
+        # alone would have given (`ladder_*`), so that a run shows what refining moved.
+        errors = {f"ours {s}": ours_err.get(s) or [(n, e) for n, _, e in ours_pts[s]] for s in OURS_SAMPLERS}
+        errors.update({f"mitsuba {s}": mi_err[s] for s in MI_SAMPLERS})
+        ladder_only = lambda pts: crossing([(n, e) for n, _, e in pts], target)
+        ladder_ratio = (ladder_only(ours_pts[ours_best]) * ours_pts[ours_best][-1][1] / ours_pts[ours_best][-1][0]) / \
+            (ladder_only(mi_pts[best]) * mi_pts[best][-1][1] / mi_pts[best][-1][0])
         rows.append({"scene": name, "ours_msps": ours_rate, "mitsuba_msps": mi_rate, "ours_sampler": ours_best,
                      "ours_spp": ours_spp, "ours_time": ours_t, "best_sampler": best, "best_spp": best_spp,
                      "best_time": best_t, "ratio": ours_t / best_t, "plain_sampler": plain_best,
                      "plain_time": plain_t, "plain_ratio": plain_t / best_t, "target_rmse": target,
-                     "reference_rmse": math.sqrt(floor2), "own_rmse_by_spp": errors})
+                     "reference_rmse": math.sqrt(floor2), "own_rmse_by_spp": errors,
+                     "ladder_ours_spp": ladder_only(ours_pts[ours_best]), "ladder_best_spp": ladder_only(mi_pts[best]),
+                     "ladder_ratio": ladder_ratio})
         md.append(f"| {name} | {ours_rate:.2f} | {mi_rate:.2f} | {ours_best} | {ours_spp:.1f} | {ours_t:.3f} | {best} | "
-                  f"{best_spp:.1f} | {best_t:.3f} | {ours_t / best_t:.2f} | {plain_best} | {plain_t / best_t:.2f} |")
+                  f"{best_spp:.1f} | {best_t:.3f} | {ours_t / best_t:.2f} | {plain_best} | {plain_t / best_t:.2f} | "
+                  f"{ladder_ratio:.2f} |")
     return md, {"mitsuba": rows}
 
 
