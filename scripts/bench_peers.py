@@ -402,7 +402,7 @@ def mitsuba(outdir, quick):
 
         def mi_between(sampler):
             # Mitsuba rounds some samplers' counts up (stratified to a square, ldsampler to
-            # a power of two, multijitter to a multiple of four at these sizes).
+            # a power of two, multijitter up for some counts: 18 -> 20, 21 -> 24, 32 -> 35).
             def between(lo, hi):
                 taken = {}
                 for c in range(int(lo) + 1, int(math.ceil(hi))):
