@@ -240,6 +240,8 @@ def crossing(pts, target):
                            "so no time to reach it can be read (a reference as noisy as the image?)")
     prev = None
     for spp, e in pts:
+        if e == target:
+            return spp  # (the line's own formula can round below it)
         if e <= target:
             if prev is None:
                 return spp * (e / target) ** 2
@@ -253,7 +255,7 @@ def crossing(pts, target):
     return spp * (e / target) ** 2
 
 
-def refine(pts, target, measure, counts_between, rounds=3):
+def refine(pts, target, measure, counts_between, rounds=8):
     """The error ladder `pts` [(spp, error)] with the counts next to its crossing of
     `target` measured too, ascending. The log-log line between two ladder counts is a
     model, and a poor one where a sampler changes its regime between them: our adaptive
@@ -263,8 +265,9 @@ def refine(pts, target, measure, counts_between, rounds=3):
     14 spp measured it at 13.5. Each round takes the two measured counts around the
     crossing (0 below the first) and measures, among the counts the sampler can take
     strictly between them, the nearest on either side of the crossing; it stops when none
-    is left, so the crossing ends between two neighbouring counts the sampler can take
-    (or after `rounds` rounds). A crossing beyond the ladder's last count is left
+    is left, so the crossing ends between two neighbouring counts the sampler can take, or
+    after `rounds` rounds (a non-monotonic ladder, as `sobol` at counts that are not powers
+    of two gives, can leave a wider bracket). A crossing beyond the ladder's last count is left
     extrapolated. `measure(spp)` renders at `spp` and returns (the count taken, error);
     `counts_between(lo, hi)` lists the counts to ask for whose taken counts lie strictly
     between lo and hi, ascending by the count taken."""
@@ -320,18 +323,18 @@ def mitsuba(outdir, quick):
           f"Time to RMSE: the time each needs to reach the RMSE of Mitsuba's {top}-spp independent image. Errors are "
           f"the images' own: taken against the mean of two {ref_spp}-spp Mitsuba `{REF_SAMPLER}` references (seeds 7 "
           "and 8), with the references' own noise (a quarter of their mean squared difference) taken off. Each "
-          f"sampler renders at {', '.join(map(str, ladder))} spp (the counts each really takes), then, up to three "
-          "times, at the counts it can take nearest the crossing on either side (so the crossing ends between two "
-          "neighbouring counts it can take: our adaptive sampling has no pilot below 8 spp, so the line from the "
+          f"sampler renders at {', '.join(map(str, ladder))} spp (the counts each really takes), then, up to eight "
+          "times, at the counts it can take nearest the crossing on either side, until the crossing lies between two "
+          "neighbouring counts it can take (our adaptive sampling has no pilot below 8 spp, so the line from the "
           "4-spp to the 16-spp count joins two regimes); the count where its error reaches the target is interpolated "
           f"between the two measured around it (log-log), and its time is that count at the time per sample of its {top}-spp "
           "render. Mitsuba's best sampler for the scene is the one that gets there first, and so is ours "
           "(independent, stratified, sobol, and stratified and sobol with adaptive sampling, whose counts are the "
           f"averages the pixels took, and sobol adaptive with {LIGHT_PATHS} light paths per camera sample for the "
           "caustics seen directly, `light`, in the scenes where they are on: elsewhere it renders sobol adaptive's "
-          "bits and is left out). Ratio = ours / best Mitsuba (below 1: we are faster); the last two columns are "
-          "our best without adaptive sampling and its ratio; the last, the ratio the ladder's counts alone gave "
-          "(the same samplers).", "",
+          "bits and is left out). Ratio = ours / best Mitsuba (below 1: we are faster); the three last columns are "
+          "our best without adaptive sampling, its ratio, and the ratio the ladder's counts alone would give for the "
+          "two best samplers.", "",
           "| scene | ours Msamples/s | Mitsuba Msamples/s | our best sampler | its spp to target | its time (s) "
           "| best Mitsuba sampler | its spp | its time (s) | ratio | our best, not adaptive | its ratio "
           "| ladder alone |",
@@ -402,7 +405,7 @@ def mitsuba(outdir, quick):
 
         def mi_between(sampler):
             # Mitsuba rounds some samplers' counts up (stratified to a square, ldsampler to
-            # a power of two, multijitter up for some counts: 18 -> 20, 21 -> 24, 32 -> 35).
+            # a power of four, multijitter up for some counts: 18 -> 20, 21 -> 24, 32 -> 35).
             def between(lo, hi):
                 taken = {}
                 for c in range(int(lo) + 1, int(math.ceil(hi))):
