@@ -1569,6 +1569,34 @@ mod tests {
             .collect()
     }
 
+    /// `area_f64` is a box's surface area (`Aabb::area`'s, to `f32` rounding) and 0 for
+    /// an empty box; in the `f32` build it stays finite where `Aabb::area` overflows.
+    #[test]
+    fn node_areas_are_surface_areas() {
+        for (k, b) in random_boxes(9000, 50).iter().enumerate() {
+            let (got, area) = (area_f64(b), b.area() as f64);
+            assert!(
+                (got - area).abs() <= 1e-6 * area,
+                "box {k}: area_f64 {got}, Aabb::area {area}"
+            );
+        }
+        assert_eq!(area_f64(&Aabb::EMPTY), 0.0);
+        #[cfg(not(feature = "f64"))]
+        {
+            let big = Aabb {
+                min: Vec3::splat(-1e30),
+                max: Vec3::new(1e30, 1e30, -1e30 + 1e24),
+            };
+            assert!(big.area().is_infinite(), "the f32 area overflows");
+            let got = area_f64(&big);
+            let want = 2.0 * (4e60 + 2.0 * 2e30 * 1e24);
+            assert!(
+                (got - want).abs() <= 1e-6 * want,
+                "area_f64 {got}, want {want}"
+            );
+        }
+    }
+
     /// The wide nodes' total area (what [`collapse`] minimizes): each node's box is the
     /// union of its lanes' boxes.
     fn wide_area<const W: usize>(nodes: &[Node<W>]) -> f64 {
