@@ -1581,20 +1581,18 @@ mod tests {
             );
         }
         assert_eq!(area_f64(&Aabb::EMPTY), 0.0);
-        #[cfg(not(feature = "f64"))]
-        {
-            let big = Aabb {
-                min: Vec3::splat(-1e30),
-                max: Vec3::new(1e30, 1e30, -1e30 + 1e24),
-            };
-            assert!(big.area().is_infinite(), "the f32 area overflows");
-            let got = area_f64(&big);
-            let want = 2.0 * (4e60 + 2.0 * 2e30 * 1e24);
-            assert!(
-                (got - want).abs() <= 1e-6 * want,
-                "area_f64 {got}, want {want}"
-            );
-        }
+        // (The module's tests run in the f32 build only.)
+        let big = Aabb {
+            min: Vec3::splat(-1e30),
+            max: Vec3::new(1e30, 1e30, -1e30 + 1e24),
+        };
+        assert!(big.area().is_infinite(), "the f32 area overflows");
+        let got = area_f64(&big);
+        let want = 2.0 * (4e60 + 2.0 * 2e30 * 1e24);
+        assert!(
+            (got - want).abs() <= 1e-6 * want,
+            "area_f64 {got}, want {want}"
+        );
     }
 
     /// The wide nodes' total area (what [`collapse`] minimizes): each node's box is the
