@@ -466,15 +466,16 @@ def mitsuba(outdir, quick):
         # alone would have given (`ladder_*`), so that a run shows what refining moved.
         errors = {f"ours {s}": ours_err.get(s) or [(n, e) for n, _, e in ours_pts[s]] for s in OURS_SAMPLERS}
         errors.update({f"mitsuba {s}": mi_err[s] for s in MI_SAMPLERS})
-        ladder_only = lambda pts: crossing([(n, e) for n, _, e in pts], target)
-        ladder_ratio = (ladder_only(ours_pts[ours_best]) * ours_pts[ours_best][-1][1] / ours_pts[ours_best][-1][0]) / \
-            (ladder_only(mi_pts[best]) * mi_pts[best][-1][1] / mi_pts[best][-1][0])
+        ladder_only = lambda pts: time_to(pts, [(n, e) for n, _, e in pts])
+        (ladder_ours_spp, ladder_ours_t), (ladder_best_spp, ladder_best_t) = \
+            ladder_only(ours_pts[ours_best]), ladder_only(mi_pts[best])
+        ladder_ratio = ladder_ours_t / ladder_best_t
         rows.append({"scene": name, "ours_msps": ours_rate, "mitsuba_msps": mi_rate, "ours_sampler": ours_best,
                      "ours_spp": ours_spp, "ours_time": ours_t, "best_sampler": best, "best_spp": best_spp,
                      "best_time": best_t, "ratio": ours_t / best_t, "plain_sampler": plain_best,
                      "plain_time": plain_t, "plain_ratio": plain_t / best_t, "target_rmse": target,
                      "reference_rmse": math.sqrt(floor2), "own_rmse_by_spp": errors,
-                     "ladder_ours_spp": ladder_only(ours_pts[ours_best]), "ladder_best_spp": ladder_only(mi_pts[best]),
+                     "ladder_ours_spp": ladder_ours_spp, "ladder_best_spp": ladder_best_spp,
                      "ladder_ratio": ladder_ratio})
         md.append(f"| {name} | {ours_rate:.2f} | {mi_rate:.2f} | {ours_best} | {ours_spp:.1f} | {ours_t:.3f} | {best} | "
                   f"{best_spp:.1f} | {best_t:.3f} | {ours_t / best_t:.2f} | {plain_best} | {plain_t / best_t:.2f} | "

@@ -1284,16 +1284,6 @@ fn collapse<const W: usize>(bin: &[Node2]) -> (Vec<Node<W>>, usize) {
             work.push((kid, base + j, level + 1));
         }
     }
-    if std::env::var_os("BVH_STATS").is_some() {
-        let lanes: usize = out.iter().map(|n| n.lanes as usize).sum();
-        eprintln!(
-            "collapse: {} nodes, {} lanes ({:.2} a node), depth {}",
-            out.len(),
-            lanes,
-            lanes as f64 / out.len() as f64,
-            depth
-        );
-    }
     (out, depth)
 }
 
