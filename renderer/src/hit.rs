@@ -32,6 +32,10 @@ pub struct Hit {
     /// Shading keys its interior list by it (an instance is only a placement, so the
     /// shapes inside one stay distinct objects).
     pub surface: u64,
+    /// Which primitive of its shape was hit: a mesh's triangle, numbered in the order the
+    /// mesh was given (its file's); 0 for the single primitives. Embree's `primID`: the
+    /// peers benchmark compares it ray by ray (renderer/docs/performance.md).
+    pub prim: u32,
 }
 
 impl Hit {
@@ -48,6 +52,7 @@ impl Hit {
             material: INHERIT,
             object_id: 0,
             surface: 0,
+            prim: 0,
         }
     }
 

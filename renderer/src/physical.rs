@@ -19,6 +19,7 @@ use crate::light::frame;
 use crate::ray::Ray;
 use crate::real::{Real, Vec3};
 use crate::sampler::{cos_sin_turn, PixelSampler};
+use crate::scene::settings::LightSampling;
 use crate::scene::{Color, Integrator, LightKind, Material, MaterialModel, Scene};
 use crate::spawn::Spawn;
 use std::f64::consts::PI;
@@ -258,6 +259,9 @@ pub struct PhysicalIntegrator<'a> {
     glass: bool,
     /// The light paths for the caustics seen directly, when on (light_paths.rs).
     light: Option<light_paths::LightPaths>,
+    /// The chance that next-event estimation picks a given light: 1 when it takes every
+    /// light (`render.light_sampling = "all"`, or a single light), else 1 / their number.
+    select: f64,
     /// A deliberate fault (tests only).
     pub fault: Option<Fault>,
 }
@@ -285,6 +289,12 @@ impl<'a> PhysicalIntegrator<'a> {
                 Vec::new()
             },
             light: light_paths::LightPaths::new(scene),
+            select: match scene.settings.light_sampling {
+                LightSampling::One => {
+                    1.0 / (scene.lights.len() + scene.area_lights.len()).max(1) as f64
+                }
+                LightSampling::All => 1.0,
+            },
             fault: None,
         }
     }
@@ -347,7 +357,8 @@ impl<'a> PhysicalIntegrator<'a> {
     }
 
     /// Solid-angle density of light sampling having produced the emitter hit `s`, seen
-    /// from `from` along the unit `dir` at distance `dist`.
+    /// from `from` along the unit `dir` at distance `dist` (with the chance of picking its
+    /// light, `select`).
     fn light_pdf_at(&self, s: &Surface, from: glam::DVec3, dir: glam::DVec3, dist: f64) -> f64 {
         let Some(&k) = self.scene.area_light_of.get(s.object_id as usize) else {
             return 0.0;
@@ -356,7 +367,7 @@ impl<'a> PhysicalIntegrator<'a> {
             return 0.0;
         }
         let light = &self.scene.area_lights[k as usize];
-        light.pdf_from(from, dir, dist, s.n_world)
+        light.pdf_from(from, dir, dist, s.n_world) * self.select
     }
 
     fn occluded(&self, s: &Surface, dir: glam::DVec3, dist: f64) -> bool {
@@ -379,8 +390,10 @@ impl<'a> PhysicalIntegrator<'a> {
         (f, pdf)
     }
 
-    /// Next-event estimation at a non-delta surface: every light once, area lights and the
-    /// environment weighted by MIS against BSDF sampling.
+    /// Next-event estimation at a non-delta surface: every light once, or with
+    /// `render.light_sampling = "one"` one light chosen uniformly (weighted by the number
+    /// of lights, as Mitsuba's emitter sampling); area lights and the environment weighted
+    /// by MIS against BSDF sampling.
     #[inline(always)]
     fn direct_light(
         &self,
@@ -389,58 +402,84 @@ impl<'a> PhysicalIntegrator<'a> {
         smp: &mut PixelSampler,
         g: Option<&AtVertex>,
     ) -> glam::DVec3 {
-        // The BSDF strategy's density of a light direction: the guided mixture's when
-        // guides face the vertex.
-        let bsdf_pdf = |pdf: f64, wi: glam::DVec3| match g {
-            Some(g) => g.pdf(pdf, wi, None),
-            None => pdf,
-        };
-        let mut sum = glam::DVec3::ZERO;
-        let p = dv(s.p);
-        for light in &self.scene.lights {
-            match light.kind {
-                LightKind::Point => {
-                    let to = dv(light.position) - p;
-                    let d2 = to.length_squared();
-                    let dist = d2.sqrt();
-                    let wi = to / dist;
-                    let (f, _) = self.eval_light(s, wo, wi);
-                    if f != glam::DVec3::ZERO && !self.occluded(s, wi, dist) {
-                        sum += f * rgb(light.color) / d2;
-                    }
-                }
-                LightKind::Directional => {
-                    let wi = -dv(light.direction);
-                    let (f, _) = self.eval_light(s, wo, wi);
-                    if f != glam::DVec3::ZERO && !self.occluded(s, wi, f64::INFINITY) {
-                        sum += f * rgb(light.color);
-                    }
-                }
-                LightKind::Environment => {
-                    sum += self.environment_light(s, wo, smp, g, rgb(light.color));
-                }
-            }
+        let n = self.scene.lights.len() + self.scene.area_lights.len();
+        if self.select < 1.0 {
+            // One light, picked with probability `select` = 1/n.
+            let k = ((smp.next_1d() * n as f64) as usize).min(n - 1);
+            return self.light_term(k, s, wo, smp, g, self.select);
         }
-        for light in &self.scene.area_lights {
-            let ls = light.sample_from(p, smp.next_2d());
-            // Nothing to sample (the back of the light does not emit).
-            if !(ls.pdf > 0.0 && ls.pdf.is_finite()) {
-                continue;
-            }
-            let (f, pdf_b) = self.eval_light(s, wo, ls.wi);
-            if f == glam::DVec3::ZERO {
-                continue;
-            }
-            if !self.occluded(s, ls.wi, ls.dist) {
-                let pdf_b = bsdf_pdf(pdf_b, ls.wi);
-                sum += f * rgb(light.radiance) * (mis(ls.pdf, pdf_b) / ls.pdf);
-            }
+        let mut sum = glam::DVec3::ZERO;
+        for k in 0..n {
+            sum += self.light_term(k, s, wo, smp, g, 1.0);
         }
         sum
     }
 
-    /// Next-event estimation of a constant environment of radiance `color`: one direction,
-    /// cosine-weighted about the facing normal (env_pdf), weighted by MIS against the BSDF
+    /// Next-event estimation of light `k` (the scene's lights, then its area lights),
+    /// picked with probability `sel` (1 when every light is taken): its contribution over
+    /// `sel`, and for area lights and the environment `sel` times the light's density in
+    /// the MIS weight, as `light_pdf_at` and the path's escape count it. With `sel` = 1
+    /// every operation on it is exact, so taking every light gives the bits it gave
+    /// before the choice existed.
+    #[inline(always)]
+    fn light_term(
+        &self,
+        k: usize,
+        s: &Surface,
+        wo: glam::DVec3,
+        smp: &mut PixelSampler,
+        g: Option<&AtVertex>,
+        sel: f64,
+    ) -> glam::DVec3 {
+        let p = dv(s.p);
+        let Some(light) = self.scene.lights.get(k) else {
+            let light = &self.scene.area_lights[k - self.scene.lights.len()];
+            let ls = light.sample_from(p, smp.next_2d());
+            // Nothing to sample (the back of the light does not emit).
+            if !(ls.pdf > 0.0 && ls.pdf.is_finite()) {
+                return glam::DVec3::ZERO;
+            }
+            let (f, pdf_b) = self.eval_light(s, wo, ls.wi);
+            if f == glam::DVec3::ZERO || self.occluded(s, ls.wi, ls.dist) {
+                return glam::DVec3::ZERO;
+            }
+            // The BSDF strategy's density of a light direction: the guided mixture's when
+            // guides face the vertex.
+            let pdf_b = match g {
+                Some(g) => g.pdf(pdf_b, ls.wi, None),
+                None => pdf_b,
+            };
+            let pdf_l = ls.pdf * sel;
+            return f * rgb(light.radiance) * (mis(pdf_l, pdf_b) / pdf_l);
+        };
+        match light.kind {
+            LightKind::Point => {
+                let to = dv(light.position) - p;
+                let d2 = to.length_squared();
+                let dist = d2.sqrt();
+                let wi = to / dist;
+                let (f, _) = self.eval_light(s, wo, wi);
+                if f != glam::DVec3::ZERO && !self.occluded(s, wi, dist) {
+                    return f * rgb(light.color) / d2 / sel;
+                }
+            }
+            LightKind::Directional => {
+                let wi = -dv(light.direction);
+                let (f, _) = self.eval_light(s, wo, wi);
+                if f != glam::DVec3::ZERO && !self.occluded(s, wi, f64::INFINITY) {
+                    return f * rgb(light.color) / sel;
+                }
+            }
+            LightKind::Environment => {
+                return self.environment_light(s, wo, smp, g, rgb(light.color), sel);
+            }
+        }
+        glam::DVec3::ZERO
+    }
+
+    /// Next-event estimation of a constant environment of radiance `color`, picked with
+    /// probability `sel`: one direction, cosine-weighted about the facing normal (env_pdf;
+    /// times `sel`, the density of this strategy), weighted by MIS against the BSDF
     /// strategy (the guided mixture's density when guides face the vertex). Out of line:
     /// inlined into `direct_light`, the frames of scenes without an environment ran 1.6 %
     /// more instructions.
@@ -452,10 +491,11 @@ impl<'a> PhysicalIntegrator<'a> {
         smp: &mut PixelSampler,
         g: Option<&AtVertex>,
         color: glam::DVec3,
+        sel: f64,
     ) -> glam::DVec3 {
         let n = s.facing(wo);
         let wi = cosine_dir(n, smp.next_2d());
-        let pdf_l = env_pdf(n, wi);
+        let pdf_l = env_pdf(n, wi) * sel;
         if !(pdf_l > 0.0) {
             return glam::DVec3::ZERO;
         }
@@ -576,7 +616,7 @@ impl<'a> PhysicalIntegrator<'a> {
             else {
                 if let Some(env) = self.env {
                     let w = if prev_pdf > 0.0 {
-                        mis(prev_pdf, env_pdf(prev_n, dir))
+                        mis(prev_pdf, env_pdf(prev_n, dir) * self.select)
                     } else {
                         taken_or_one(prev_pdf)
                     };

@@ -212,8 +212,15 @@ transform = [{ scale = 0.5 }, { translate = [0, -0.5, 0] }]
 /// tiny window (the camera at `from` cannot see the light; the light is black, so `path`
 /// has nothing to add to `direct`). Renders it with each integrator at 16,384 spp and
 /// checks each channel's mean against `0.5 · radiance · factor` (z < 5), then hands the
-/// image to `more` (integrator, image, the expected red).
-fn light_over_a_plane(from: &str, light: &str, factor: f64, more: impl Fn(&str, &Image, f64)) {
+/// image to `more` (integrator, image, the expected red). `render` is added to the
+/// `[render]` table.
+fn light_over_a_plane(
+    from: &str,
+    render: &str,
+    light: &str,
+    factor: f64,
+    more: impl Fn(&str, &Image, f64),
+) {
     let text = format!(
         r#"
 [camera.look_at]
@@ -226,6 +233,7 @@ width = 2
 height = 2
 integrator = "INTEGRATOR"
 max_depth = 4
+{render}
 [materials.floor]
 model = "diffuse"
 color = [0.5, 0.5, 0.5]
@@ -274,6 +282,7 @@ fn test04_square_light_over_a_plane() {
     let form_factor = 4.0 / std::f64::consts::PI * a * a.atan();
     light_over_a_plane(
         "[4, 1, 0.5]",
+        "",
         r#"type = "rectangle"
 transform = [{ rotate = { axis = [1, 0, 0], degrees = 180 } }, { translate = [0, 1, 0] }]"#,
         form_factor,
@@ -294,6 +303,7 @@ transform = [{ rotate = { axis = [1, 0, 0], degrees = 180 } }, { translate = [0,
 fn test05_sphere_light_over_a_plane() {
     light_over_a_plane(
         "[4, 0.5, 0.5]",
+        "",
         r#"type = "sphere"
 transform = [{ scale = 0.8 }, { rotate = { axis = [1, 2, 3], degrees = 40 } }, { translate = [0, 1, 0] }]"#,
         0.8 * 0.8,
@@ -311,6 +321,44 @@ transform = [{ scale = 0.8 }, { rotate = { axis = [1, 2, 3], degrees = 40 } }, {
             );
         },
     );
+}
+
+/// The square light of test04 with a point light, a directional light and an
+/// environment, each a multiple of its radiance (4, 2, 1): the plane's radiance below the
+/// light's centre is ρ·L·(F + e·(1 − F) + (k/h² + m·cos θ)/π), where the light hides the
+/// fraction F of the environment (the form factor is the cosine-weighted share of the
+/// hemisphere it covers), the point light of intensity k·L is at height h below the square
+/// light, and the directional light of irradiance m·L comes in at cos θ = 1/√5 past the
+/// square's edge. With `light_sampling = "one"` every estimate takes one of the four
+/// lights, chosen uniformly: a weight or density that forgets the choice biases it by a
+/// factor of up to four, and so does one that counts it twice.
+#[test]
+fn test09_one_light_a_vertex_keeps_the_closed_form() {
+    let a = 1.0f64 / (1.0f64 + 1.0).sqrt();
+    let f = 4.0 / std::f64::consts::PI * a * a.atan();
+    let (e, k, h, m) = (0.25, 0.5, 0.5, 0.75);
+    let cos = 1.0 / 5f64.sqrt();
+    let factor = f + e * (1.0 - f) + (k / (h * h) + m * cos) / std::f64::consts::PI;
+    for sampling in ["one", "all"] {
+        light_over_a_plane(
+            "[4, 1, 0.5]",
+            &format!("light_sampling = \"{sampling}\""),
+            r#"type = "rectangle"
+transform = [{ rotate = { axis = [1, 0, 0], degrees = 180 } }, { translate = [0, 1, 0] }]
+[[lights]]
+position = [0, 0.5, 0]
+color = [2, 1, 0.5]
+[[lights]]
+type = "directional"
+direction = [2, -1, 0]
+color = [3, 1.5, 0.75]
+[[lights]]
+type = "environment"
+color = [1, 0.5, 0.25]"#,
+            factor,
+            |_, _, _| {},
+        );
+    }
 }
 
 /// Glass of ior 1 (the default) is invisible: through a slanted dielectric rectangle every

@@ -106,3 +106,49 @@ fn mesh_quad() {
         hit(1.0, [0., 1., 0.], [0.5, 0.25]),
     );
 }
+
+/// A hit names the triangle it found by its number in the order the mesh was given
+/// (`Hit::prim`, Embree's primID, which the peers benchmark compares ray by ray), not by
+/// the BVH's order: a 16 × 16 grid of quads (512 triangles, given in a scrambled order so
+/// that the tree reorders them), each triangle hit at its centroid from above.
+#[test]
+fn mesh_hits_name_their_triangle_as_given() {
+    use renderer::aggregate::Shape;
+    use renderer::shapes::Mesh;
+    use renderer::{Ray, Real, Vec3};
+    use std::sync::Arc;
+    let n = 16u32;
+    let pos: Vec<Vec3> = (0..=n)
+        .flat_map(|j| (0..=n).map(move |i| Vec3::new(i as Real, 0.0, j as Real)))
+        .collect();
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    let mut tris = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            tris.push([at(i, j), at(i, j + 1), at(i + 1, j + 1)]);
+            tris.push([at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
+        }
+    }
+    // Scrambled: triangle k goes to place (k · 97) mod 512 (97 is prime to 512).
+    let m = tris.len();
+    let mut given = vec![[0u32; 3]; m];
+    for (k, t) in tris.iter().enumerate() {
+        given[k * 97 % m] = *t;
+    }
+    let s = Shape::Mesh(Arc::new(
+        Mesh::new(pos.clone(), None, None, given.clone()).expect("valid mesh"),
+    ));
+    for (k, t) in given.iter().enumerate() {
+        let c = t.iter().map(|&v| pos[v as usize]).sum::<Vec3>() / 3.0;
+        let r = Ray::new(c + Vec3::Y, -Vec3::Y);
+        let h = s
+            .intersect(&r, 0.0, Real::INFINITY)
+            .unwrap_or_else(|| panic!("the ray down to triangle {k}'s centroid {c} missed"));
+        assert_eq!(
+            h.prim, k as u32,
+            "the hit at triangle {k}'s centroid {c} names triangle {}: Hit::prim must be \
+             the number as given (Mesh::finish, renderer/src/shapes/mesh.rs)",
+            h.prim
+        );
+    }
+}

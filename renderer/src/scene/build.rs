@@ -202,6 +202,7 @@ it bounds the recursion of the classic model and the length of a path",
         adaptive: r.adaptive,
         guides: r.guides,
         light_paths: r.light_paths,
+        light_sampling: r.light_sampling,
     };
     let classic = r.integrator == Integrator::Classic;
     let camera = build_camera(&desc.camera, r.width, r.height, &src)?;

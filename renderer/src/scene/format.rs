@@ -187,6 +187,9 @@ pub struct RenderDesc {
     /// (0, the default, traces none).
     #[serde(default)]
     pub light_paths: f64,
+    /// Physical model: every light at each vertex, or one chosen uniformly.
+    #[serde(default)]
+    pub light_sampling: super::settings::LightSampling,
 }
 
 fn yes() -> bool {

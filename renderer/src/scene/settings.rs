@@ -33,6 +33,20 @@ pub struct Settings {
     /// Path integrator: light paths traced per camera sample for the caustics seen
     /// directly (light_paths.rs); 0 turns them off.
     pub light_paths: f64,
+    /// Physical model: how next-event estimation picks lights.
+    pub light_sampling: LightSampling,
+}
+
+/// How the physical integrators' next-event estimation picks lights at a vertex.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LightSampling {
+    /// Every light once: a shadow ray each, less noise a sample.
+    #[default]
+    All,
+    /// One light, chosen uniformly among all of them, weighted by their number: one
+    /// shadow ray, as Mitsuba 3's emitter sampling does.
+    One,
 }
 
 /// Light transport.

@@ -336,23 +336,25 @@ impl Mesh {
     /// The hit record of the winning candidate (built once per ray, for the closest hit
     /// only). The vertices come from the pack the search just read (the same values as
     /// `positions`, copied); the triangle's vertex indices are read only for normals or
-    /// uvs.
+    /// uvs, its number as given always (the hit's `prim`).
     #[inline]
     fn finish(&self, c: Candidate) -> Hit {
         let (t, b) = (c.t, c.b);
         let [p0, p1, p2] = self.packs[c.pack as usize].triangle(c.lane as usize);
-        let tri = (self.normals.is_some() || self.uvs.is_some())
-            .then(|| self.triangles[self.pack_tris[c.pack as usize][c.lane as usize] as usize]);
+        let index = self.pack_tris[c.pack as usize][c.lane as usize] as usize;
+        let tri = (self.normals.is_some() || self.uvs.is_some()).then(|| self.triangles[index]);
         let n = self.normals.as_deref().zip(tri).map(|(v, t)| pick3(v, t));
         let uv = self.uvs.as_deref().zip(tri).map(|(v, t)| pick3(v, t));
-        surface(
+        let mut hit = surface(
             t,
             b,
             [p0, p1, p2],
             (p1 - p0).cross(p2 - p0),
             n.as_ref(),
             uv.as_ref(),
-        )
+        );
+        hit.prim = self.given[index];
+        hit
     }
 
     /// Whether any triangle is hit.
