@@ -4,20 +4,22 @@
     bench_peers.py OUTDIR [--quick] [--only embree,povray,mitsuba,growth]
 
 Each row is a ratio measured in this run: ours and the peer alternate, and the spread is
-the range of the per-pair ratios. Writes OUTDIR/peers.md and OUTDIR/peers.json.
-- Embree 4 (embreex): the ~1M-triangle mesh and the four ray sets our `peers` bench wrote,
-  closest hit (`INTERSECT`) and any hit (`OCCLUDED`), plus the BVH build, in alternating
-  pairs (ours, then Embree; three, one with --quick). embreex traces
-  a batch with one thread (rtcIntersect1 per ray), so the peer column is one thread.
-- POV-Ray 3.7: N = 1, 100, 10,000 spheres over a plane with shadows, with no reflection,
-  reflective spheres, and reflective spheres and floor; exported by our SDL exporter, at
-  pixel centres (-A), 2 threads; whole-process wall and CPU time, and POV-Ray's own
-  trace time.
-- Mitsuba 3 (scalar_rgb): four catalog scenes at 256 x 256; samples per second at equal
-  spp, and the time to reach the RMSE of Mitsuba's 256-spp independent image (each image's
-  own error, the reference's noise taken off; the sample count where each sampler gets
-  there, from renders at 4 to 256 spp), ours against Mitsuba's best sampler for the scene.
-- Cost growth: time per primary ray from 100 to 10^6 spheres and triangles (ours).
+the range of the per-pair ratios. Writes OUTDIR/peers.md and OUTDIR/peers.json. Each peer
+is run as its own users run it, and ours is the plain `cargo build --release`:
+- Embree 4 (embreex, peers_embree.py): the ~1M-triangle mesh and the four ray sets our
+  `peers` bench wrote, closest hit and any hit on 1 and 2 threads each, Embree in its
+  default mode (the headline) and in robust mode, plus the BVH build; both sides store
+  every ray's result, and the closest hits are compared ray by ray.
+- POV-Ray 3.7 (peers_povray.py): N = 1, 100, 10,000 spheres over a plane with shadows,
+  with no reflection, reflective spheres, and reflective spheres and floor; exported by
+  our SDL exporter, at pixel centres (-A), 2 threads; whole-process wall and CPU time,
+  and POV-Ray's own trace time.
+- Mitsuba 3 (peers_mitsuba.py): `llvm_ad_rgb` (and `scalar_rgb`) on four catalog scenes
+  and four in no catalog (bench_scenes.py) at 256 x 256: samples per second with the same
+  algorithm, and the time each side's best sampler needs to reach the same error, timed
+  on real renders at the crossing count.
+- Cost growth (peers_growth.py): time per primary ray from 100 to 10^6 spheres and
+  triangles (ours).
 """
 
 import json

@@ -2,12 +2,15 @@
 # A profile-guided (PGO) release build of the renderer, the conformance tool and the peers
 # bench: the same code and the same output bits as `cargo build --release`, laid out and
 # inlined by what a training run measured (renderer/docs/performance.md, "A profile-guided
-# build"). About 10 % faster on the physical scenes; the gate never uses it.
+# build"). About 10 % faster on the physical scenes; the gate never uses it, and neither
+# does scripts/bench-peers.sh: the training below runs the peers bench's own mesh and ray
+# sets and the Mitsuba catalog scenes it times, so the peer comparison times the plain
+# `cargo build --release` (renderer/docs/performance.md).
 #
 #   scripts/build-pgo.sh            builds into ${CARGO_TARGET_DIR:-target}/pgo/use
-#   scripts/build-pgo.sh --env      also prints, for `eval`, where scripts/bench_peers.py
-#                                   finds the builds (PEERS_BIN_DIR, PEERS_BENCH_TARGET_DIR,
-#                                   PEERS_BENCH_RUSTFLAGS)
+#   scripts/build-pgo.sh --env      also prints, for `eval`, where the builds are
+#                                   (PEERS_BIN_DIR, PEERS_BENCH_TARGET_DIR, and the
+#                                   PEERS_BENCH_RUSTFLAGS that `cargo bench` needs there)
 #
 # Steps: an instrumented build (target/pgo/instrumented); a training run on it, single
 # threaded so the counts are the same each time (every catalog scene as written, the

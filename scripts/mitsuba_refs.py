@@ -1,6 +1,8 @@
 #!/usr/bin/env python3
-"""Renders Mitsuba 3 references for one exported scene (scalar_rgb; the llvm variants abort
-on these machines).
+"""Renders Mitsuba 3 references for one exported scene: with `scalar_rgb`, or for
+`radiance` and `time` with the variant MITSUBA_VARIANT names (`llvm_ad_rgb`, Mitsuba's fast
+CPU variant, needs DRJIT_LIBLLVM_PATH set to a libLLVM 19: conformance/docs/mitsuba.md).
+Geometry is always traced in `scalar_rgb`, one pixel-centre ray at a time.
 
     mitsuba_refs.py geometry SCENE.xml OUT.exr
         For every pixel, the pixel-centre ray (sensor.sample_ray) and scene.ray_intersect.
@@ -15,15 +17,17 @@ on these machines).
         mi.render took (scene loading excluded).
     mitsuba_refs.py version
 """
+import os
 import sys
 
 import numpy as np
 import mitsuba as mi
 
-mi.set_variant("scalar_rgb")
+VARIANT = os.environ.get("MITSUBA_VARIANT", "scalar_rgb")
 
 
 def geometry(xml, out):
+    mi.set_variant("scalar_rgb")
     scene = mi.load_file(xml)
     sensor = scene.sensors()[0]
     w, h = sensor.film().size()
@@ -43,6 +47,7 @@ def geometry(xml, out):
 
 
 def radiance(xml, out, spp):
+    mi.set_variant(VARIANT)
     scene = mi.load_file(xml)
     mi.render(scene, spp=spp, seed=0)
     scene.sensors()[0].film().bitmap(raw=False).write(out)
@@ -51,6 +56,7 @@ def radiance(xml, out, spp):
 def timed(xml, out, spp):
     import time
 
+    mi.set_variant(VARIANT)
     scene = mi.load_file(xml)
     t0 = time.perf_counter()
     image = mi.render(scene, spp=spp, seed=0)

@@ -8,12 +8,12 @@ import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 TARGET = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
-# scripts/bench-peers.sh points these at the profile-guided build (scripts/build-pgo.sh
-# --env) unless it is run with --plain.
-BIN_DIR = os.environ.get("PEERS_BIN_DIR", os.path.join(TARGET, "release"))
+# Ours is the build README.md gives: the plain `cargo build --release` (and `cargo bench`,
+# whose profile is the release one, for the peers bench).
+BIN_DIR = os.path.join(TARGET, "release")
 RENDERER = os.path.join(BIN_DIR, "renderer")
 CONFORMANCE = os.path.join(BIN_DIR, "conformance")
-BUILD = "profile-guided (scripts/build-pgo.sh)" if "PEERS_BIN_DIR" in os.environ else "plain `cargo build --release`"
+BUILD = "plain `cargo build --release`"
 
 
 def run_timed(argv, cwd=None):
@@ -33,10 +33,11 @@ def spread(ratios):
 
 
 def peers_bench(*args):
-    env = dict(os.environ)
-    if "PEERS_BENCH_TARGET_DIR" in env:
-        env["CARGO_TARGET_DIR"] = env["PEERS_BENCH_TARGET_DIR"]
-        env["RUSTFLAGS"] = env.get("PEERS_BENCH_RUSTFLAGS", "")
     out = subprocess.run(["cargo", "bench", "-q", "-p", "renderer", "--bench", "peers", "--", *args],
-                         cwd=ROOT, capture_output=True, text=True, check=True, env=env).stdout
+                         cwd=ROOT, capture_output=True, text=True, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
+
+
+def med(x):
+    """The median (the upper one of an even count)."""
+    return sorted(x)[len(x) // 2]

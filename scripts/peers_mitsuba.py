@@ -1,23 +1,52 @@
-"""Mitsuba 3 on physical scenes exported by our Mitsuba exporter, for scripts/bench_peers.py."""
+"""Mitsuba 3 on physical scenes exported by our Mitsuba exporter, for scripts/bench_peers.py.
+
+Mitsuba is run as its own users run it: its fast CPU variant `llvm_ad_rgb` (wide SIMD over
+many samples at once, the kernel JIT-compiled by LLVM; Debian's libLLVM 19, found through
+DRJIT_LIBLLVM_PATH, which scripts/bench-peers.sh sets) is the headline, each timed render
+after a warm-up render of the same kernel, so that the compile is not timed; `scalar_rgb`
+is a second column. Both render on every core, ours on two threads (the machine's two).
+
+Two questions, two ratios, on the four catalog scenes and the four of
+scripts/bench_scenes.py that are in no catalog:
+- The same algorithm: the independent sampler at a fixed count on both sides, and on ours
+  no adaptive sampling, no specular guides and no light paths: Mitsuba's estimator, so the
+  ratio of samples per second is the tracer's speed.
+- The best of each: the time each side needs to reach the same error with its best
+  sampler and options. The error target is the RMSE of Mitsuba's independent image at the
+  top count; each sampler's error ladder finds the count where it gets there (refined next
+  to the crossing), and that count is then rendered and timed, on both sides.
+"""
 
 import math
 import os
 import re
 import subprocess
+import sys
 import time
 
-from peers_common import CONFORMANCE, RENDERER, ROOT, run_timed
+import bench_scenes
+from peers_common import CONFORMANCE, RENDERER, ROOT, med, run_timed, spread
 
-MI_SCENES = ["mi_area_soft_shadow", "mi_mirror_sphere", "mi_glass_sphere", "mi_cornell"]
+CATALOG = ["mi_area_soft_shadow", "mi_mirror_sphere", "mi_glass_sphere", "mi_cornell"]
+SCENES = CATALOG + bench_scenes.NAMES
+VARIANT = "llvm_ad_rgb"
+SCALAR = "scalar_rgb"
 MI_SAMPLERS = ["independent", "stratified", "multijitter", "ldsampler"]
 # The reference's sampler: stratified, so that its own noise is far below the errors it measures.
 REF_SAMPLER = "multijitter"
-# "X adaptive": sampler X with render.adaptive (renderer/docs/physical.md), whose counts are
-# the averages the pixels took; "X adaptive light": that, with LIGHT_PATHS light paths per
-# camera sample for the caustics seen directly (render.light_paths).
-OURS_SAMPLERS = ["independent", "stratified", "sobol", "stratified adaptive", "sobol adaptive",
-                 "sobol adaptive light"]
+# Our configurations: a sampler, then flags. "adaptive": render.adaptive (the count is the
+# average the pixels took); "light": LIGHT_PATHS light paths per camera sample for the
+# caustics seen directly; "noguides": render.guides off (path scenes); "one":
+# render.light_sampling = "one" (one light a vertex, as Mitsuba picks one emitter; else
+# every light). Without "noguides", a path scene has its specular guides, on by default.
+# SAME is Mitsuba's estimator.
+SAME = "independent noguides one"
+OURS_CONFIGS = ["independent", "stratified", "sobol", "sobol adaptive",
+                "sobol adaptive light", "sobol adaptive noguides", "sobol adaptive one"]
 LIGHT_PATHS = 0.25
+# Mitsuba's llvm variant holds every sample of a render in flight at once; the references'
+# thousands of samples a pixel are rendered as passes of this many, with their own seeds.
+REF_PASS_SPP = 128
 
 
 def crossing(pts, target):
@@ -79,116 +108,170 @@ def refine(pts, target, measure, counts_between, rounds=8):
     return pts
 
 
-def mitsuba_scene(name, size):
-    """Catalog scene NAME of conformance/scenes/mitsuba as text, at size x size pixels."""
+def scene_text(name, size):
+    """Scene NAME (a catalog scene of conformance/scenes/mitsuba or one of bench_scenes)
+    as text, at size x size pixels."""
+    if name in bench_scenes.SCENES:
+        return bench_scenes.text(name, size)
     text = open(os.path.join(ROOT, "conformance/scenes/mitsuba", name + ".toml")).read()
     text = re.sub(r"(?m)^width = \d+", f"width = {size}", text)
     return re.sub(r"(?m)^height = \d+", f"height = {size}", text)
 
 
-def with_sampler(text, sampler):
-    """A scene's text with our `sampler` set in its [render] table ("X adaptive": sampler X
-    with adaptive sampling on; "X adaptive light": and LIGHT_PATHS light paths)."""
-    name, *flags = sampler.split(" ")
-    extra = "\nadaptive = true" if "adaptive" in flags else ""
-    extra += f"\nlight_paths = {LIGHT_PATHS}" if "light" in flags else ""
-    return re.sub(r"(?m)^\[render\]$", f'[render]\nsampler = "{name}"{extra}', text, count=1)
+def with_config(text, config):
+    """A scene's text with our configuration `config` (see OURS_CONFIGS) in its [render]
+    table."""
+    name, *flags = config.split(" ")
+    path = re.search(r'(?m)^integrator = "path"', text) is not None
+    extra = f'\nsampler = "{name}"\nadaptive = {"true" if "adaptive" in flags else "false"}'
+    extra += f'\nlight_sampling = "{"one" if "one" in flags else "all"}"'
+    if path:
+        extra += f"\nlight_paths = {LIGHT_PATHS if 'light' in flags else 0}"
+        extra += f"\nguides = {'false' if 'noguides' in flags else 'true'}"
+    return re.sub(r"(?m)^\[render\]$", "[render]" + extra, text, count=1)
 
 
 def mitsuba(outdir, quick):
     import mitsuba as mi
     import numpy as np
-    mi.set_variant("scalar_rgb")
+
+    if VARIANT not in mi.variants():
+        raise RuntimeError(f"this Mitsuba has no {VARIANT} variant")
     mi.set_log_level(mi.LogLevel.Error)  # the samplers' notes on rounding their counts
     d = os.path.join(outdir, "mitsuba")
     os.makedirs(d, exist_ok=True)
     size = 128 if quick else 256
-    ref_spp = 256 if quick else 2048
+    ref_spp = 256 if quick else 1024
     top = 16 if quick else 256
+    same_spp = 16 if quick else 64
+    pairs = 1 if quick else 3
     # Powers of 4: Mitsuba's ldsampler rounds a count up to a square power of two (at
     # least 4) and its stratified sampler to a square; each point is placed at the count
     # the sampler really took (`mi_count`).
     ladder = [4 ** k for k in range(1, 5) if 4 ** k <= top]
-    md = ["### Mitsuba 3 (scalar_rgb), the same scenes exported by our Mitsuba exporter", "",
-          f"{size} x {size}. Samples/s at {top} spp (ours 2 threads; Mitsuba's scalar variant uses every core). "
-          f"Time to RMSE: the time each needs to reach the RMSE of Mitsuba's {top}-spp independent image. Errors are "
-          f"the images' own: taken against the mean of two {ref_spp}-spp Mitsuba `{REF_SAMPLER}` references (seeds 7 "
-          "and 8), with the references' own noise (a quarter of their mean squared difference) taken off. Each "
-          f"sampler renders at {', '.join(map(str, ladder))} spp (the counts each really takes), then, up to eight "
-          "times, at the counts it can take nearest the crossing on either side, until the crossing lies between two "
-          "neighbouring counts it can take (our adaptive sampling has no pilot below 8 spp, so the line from the "
-          "4-spp to the 16-spp count joins two regimes); the count where its error reaches the target is interpolated "
-          f"between the two measured around it (log-log), and its time is that count at the time per sample of its {top}-spp "
-          "render. Mitsuba's best sampler for the scene is the one that gets there first, and so is ours "
-          "(independent, stratified, sobol, and stratified and sobol with adaptive sampling, whose counts are the "
-          f"averages the pixels took, and sobol adaptive with {LIGHT_PATHS} light paths per camera sample for the "
-          "caustics seen directly, `light`, in the scenes where they are on: elsewhere it renders sobol adaptive's "
-          "bits and is left out). Ratio = ours / best Mitsuba (below 1: we are faster); the three last columns are "
-          "our best without adaptive sampling, its ratio, and the ratio the ladder's counts alone would give for the "
-          "two best samplers.", "",
-          "| scene | ours Msamples/s | Mitsuba Msamples/s | our best sampler | its spp to target | its time (s) "
-          "| best Mitsuba sampler | its spp | its time (s) | ratio | our best, not adaptive | its ratio "
-          "| ladder alone |",
-          "|---|---:|---:|---|---:|---:|---|---:|---:|---:|---|---:|---:|"]
+    md = [f"### Mitsuba 3 (`{VARIANT}`, and `{SCALAR}` for the same algorithm), the same scenes exported by our "
+          "Mitsuba exporter", "",
+          f"{size} x {size}, ours on 2 threads, Mitsuba on every core (2); each Mitsuba render timed after a warm-up "
+          f"render of the same kernel (the JIT compile excluded); {pairs} alternating pair(s), seeds 0..{pairs - 1} "
+          "for Mitsuba (ours is deterministic). The catalog scenes first, then the four of scripts/bench_scenes.py, "
+          "which are in no catalog.", "",
+          f"**The same algorithm** (the independent sampler at {same_spp} spp; ours without adaptive sampling, "
+          "specular guides or light paths, and with one light a vertex: Mitsuba's estimator): samples per second, ratio = ours / Mitsuba "
+          "(above 1: we are faster), the median of the per-pair ratios and their range.", "",
+          f"| scene | ours Msamples/s | {VARIANT} Msamples/s | ratio (spread) | {SCALAR} Msamples/s | ratio (spread) |",
+          "|---|---:|---:|---:|---:|---:|"]
+    best_md = ["", f"**The best of each**: the time to reach the RMSE of Mitsuba's {top}-spp independent image "
+               f"(`{VARIANT}`, the mean of seeds 0 and 1). Errors are the images' own: taken against the mean of two "
+               f"{ref_spp}-spp Mitsuba `{REF_SAMPLER}` references (seeds from 1000 and 2000 up, {REF_PASS_SPP} spp a "
+               "pass), the references' own noise (a quarter of their mean squared difference) taken off. Each "
+               f"sampler renders at {', '.join(map(str, ladder))} spp (the counts each really takes), then, up to "
+               "eight times, at the counts it can take nearest the crossing on either side; the count where its "
+               "error reaches the target is interpolated between the two measured around it (log-log). That count, "
+               "rounded up to one the sampler takes, is then rendered and timed, in alternating pairs: the time is "
+               "a real render's. Ours: " + ", ".join(OURS_CONFIGS) + " (`adaptive`: adaptive sampling, its count "
+               f"the average the pixels took; `light`: {LIGHT_PATHS} light paths per camera sample, in the scenes "
+               "where they are on; `noguides`: no specular guides, on by default in path scenes; `one`: one light "
+               "a vertex, as Mitsuba, where ours takes every light by default; a configuration that renders "
+               "another's bits in a scene is left out there). Mitsuba: "
+               + ", ".join(MI_SAMPLERS) + ". Ratio = ours / Mitsuba for the best of each (below 1: we are faster), "
+               "the median of the per-pair ratios and their range.", "",
+               "| scene | our best | its spp | its time (s) | Mitsuba's best | its spp | its time (s) | ratio (spread) "
+               "| our best at a fixed count | its ratio |",
+               "|---|---|---:|---:|---|---:|---:|---:|---|---:|"]
     rows = []
-    for name in MI_SCENES:
-        text = mitsuba_scene(name, size)
+    for name in SCENES:
+        print(f"   {name}", flush=True, file=sys.stderr)
+        text = scene_text(name, size)
+        if name in bench_scenes.SCENES:
+            bench_scenes.write(name, d, size)  # the mesh it names, beside it
         toml = os.path.join(d, name + ".toml")
         open(toml, "w").write(text)
         xml = os.path.join(d, name + ".xml")
         subprocess.run([CONFORMANCE, "export-mitsuba", toml, "-o", xml, "--spp", "16"], check=True)
         base_xml = open(xml).read()
+        loaded = {}
+
+        def mi_scene(variant, sampler):
+            if (variant, sampler) not in loaded:
+                mi.set_variant(variant)
+                x = base_xml.replace('<sampler type="independent">', f'<sampler type="{sampler}">')
+                p = os.path.join(d, f"{name}_{sampler}.xml")
+                open(p, "w").write(x)
+                loaded[(variant, sampler)] = mi.load_file(p)
+            mi.set_variant(variant)
+            return loaded[(variant, sampler)]
 
         def mi_count(sampler, spp):
+            mi.set_variant(VARIANT)
             smp = mi.load_dict({"type": sampler, "sample_count": 4})
             smp.set_sample_count(spp)
             return smp.sample_count()
 
-        def mi_render(sampler, spp, seed=0):
-            x = base_xml.replace('<sampler type="independent">', f'<sampler type="{sampler}">')
-            p = os.path.join(d, f"{name}_{sampler}.xml")
-            open(p, "w").write(x)
-            scene = mi.load_file(p)
+        def mi_render(sampler, spp, seed=0, variant=VARIANT, timed=False):
+            """(seconds, image, count taken); `timed`: after a warm-up render of the same
+            kernel (llvm), so that the time is the render's, not the compile's."""
+            scene = mi_scene(variant, sampler)
+            if timed and variant != SCALAR:
+                np.array(mi.render(scene, spp=spp, seed=seed))
             t0 = time.perf_counter()
             img = np.array(mi.render(scene, spp=spp, seed=seed), dtype=np.float64)
-            return time.perf_counter() - t0, img, mi_count(sampler, spp)
+            return time.perf_counter() - t0, img[:, :, :3], mi_count(sampler, spp)
 
-        def ours_render(sampler, spp):
+        def ours_render(config, spp):
             # Render time as the CLI reports it (scene loading and the file write excluded,
             # as for Mitsuba, whose mi.render is timed alone).
-            # With adaptive sampling the count is the average the pixels took (the log's).
-            tag = sampler.replace(" ", "_")
+            tag = config.replace(" ", "_")
             st = os.path.join(d, f"{name}_ours_{tag}.toml")
-            open(st, "w").write(with_sampler(text, sampler))
+            open(st, "w").write(with_config(text, config))
             out = os.path.join(d, f"{name}_ours_{tag}_{spp}.exr")
             _, _, log = run_timed([RENDERER, "render", st, "-o", out, "--spp", str(spp), "--threads", "2"])
             m = re.search(r"([\d.]+) spp, ([\d.]+) s ->", log)
             img = np.array(mi.Bitmap(out), dtype=np.float64)[:, :, :3]
             return max(float(m.group(2)), 1e-4), img, float(m.group(1))
 
+        # The same algorithm, in alternating pairs.
+        px = size * size * same_spp / 1e6
+        same = []
+        for k in range(pairs):
+            a = ours_render(SAME, same_spp)[0]
+            b = mi_render("independent", same_spp, seed=k, timed=True)[0]
+            c = mi_render("independent", same_spp, seed=k, variant=SCALAR, timed=True)[0]
+            same.append((px / a, px / b, px / c))
+        r_llvm = [o / m for o, m, _ in same]
+        r_scalar = [o / s for o, _, s in same]
+        ours_rate, llvm_rate, scalar_rate = (med([t[i] for t in same]) for i in range(3))
+        md.append(f"| {name} | {ours_rate:.2f} | {llvm_rate:.2f} | {med(r_llvm):.2f} ({spread(r_llvm)}) | "
+                  f"{scalar_rate:.2f} | {med(r_scalar):.2f} ({spread(r_scalar)}) |")
+
         # The reference: two independent renders, whose difference measures their own
         # noise (each pixel's error variance of the mean is a quarter of E[(r1 - r2)^2]).
-        _, r1, _ = mi_render(REF_SAMPLER, ref_spp, seed=7)
-        _, r2, _ = mi_render(REF_SAMPLER, ref_spp, seed=8)
-        ref = (r1[:, :, :3] + r2[:, :, :3]) / 2
-        floor2 = float(np.mean((r1[:, :, :3] - r2[:, :, :3]) ** 2)) / 4
+        def reference(seed0):
+            passes = max(1, ref_spp // REF_PASS_SPP)
+            acc = 0.0
+            for k in range(passes):
+                acc = acc + mi_render(REF_SAMPLER, min(ref_spp, REF_PASS_SPP), seed=seed0 + k)[1]
+            return acc / passes
+
+        r1, r2 = reference(1000), reference(2000)
+        ref = (r1 + r2) / 2
+        floor2 = float(np.mean((r1 - r2) ** 2)) / 4
         # An image's own error: its mean squared difference to the reference, less the
         # reference's own part (independent of the image's, so their squares add).
-        own = lambda img: math.sqrt(max(float(np.mean((img[:, :, :3] - ref) ** 2)) - floor2, 0.0))
+        own = lambda img: math.sqrt(max(float(np.mean((img - ref) ** 2)) - floor2, 0.0))
+        target = (own(mi_render("independent", top, seed=0)[1]) + own(mi_render("independent", top, seed=1)[1])) / 2
 
         def same_images(a, b):
-            # Whether our samplers a and b gave the same bits at every count.
-            files = lambda s, spp: os.path.join(d, f"{name}_ours_{s.replace(' ', '_')}_{spp}.exr")
-            return all(open(files(a, spp), "rb").read() == open(files(b, spp), "rb").read()
-                       for spp in ladder)
+            # Whether our configurations a and b gave the same bits at every ladder count.
+            files = lambda c, spp: os.path.join(d, f"{name}_ours_{c.replace(' ', '_')}_{spp}.exr")
+            return all(open(files(a, spp), "rb").read() == open(files(b, spp), "rb").read() for spp in ladder)
 
         def ladder_of(render):
-            # Each point at the count the render really took.
-            pts = []
+            # Each point at the count the render really took: (count, error).
+            out = []
             for spp in ladder:
-                t, img, n = render(spp)
-                pts.append((n, t, own(img)))
-            return pts
+                _, img, n = render(spp)
+                out.append((n, own(img)))
+            return out
 
         def ours_between(lo, hi):
             # Our renders take the count asked for (adaptive ones on average, to 0.1 %).
@@ -212,63 +295,63 @@ def mitsuba(outdir, quick):
                 return n, own(img)
             return measure
 
-        # Ours and Mitsuba alternate sampler by sampler, so a slow phase of the machine
-        # falls on both.
-        ours_pts, mi_pts = {}, {}
-        for k in range(max(len(OURS_SAMPLERS), len(MI_SAMPLERS))):
-            if k < len(OURS_SAMPLERS):
-                s = OURS_SAMPLERS[k]
-                ours_pts[s] = ladder_of(lambda spp, s=s: ours_render(s, spp))
+        # Error ladders, ours and Mitsuba's alternating, each refined next to its crossing.
+        ours_err, mi_err = {}, {}
+        for k in range(max(len(OURS_CONFIGS), len(MI_SAMPLERS))):
+            if k < len(OURS_CONFIGS):
+                c = OURS_CONFIGS[k]
+                render = lambda spp, c=c: ours_render(c, spp)
+                ours_err[c] = refine(ladder_of(render), target, measured(render), ours_between)
             if k < len(MI_SAMPLERS):
                 s = MI_SAMPLERS[k]
-                mi_pts[s] = ladder_of(lambda spp, s=s: mi_render(s, spp))
-        target = mi_pts["independent"][-1][2]
-        # Light paths are on only in scenes with mirror or glass objects (and where they are
-        # exact): elsewhere "X light" renders X's bits, and only the clock would tell them
-        # apart, so it is left out.
-        candidates = [s for s in OURS_SAMPLERS
-                      if not (s.endswith(" light") and same_images(s, s[:-len(" light")]))]
+                render = lambda spp, s=s: mi_render(s, spp)
+                mi_err[s] = refine(ladder_of(render), target, measured(render), mi_between(s))
+        # A flag the scene has no use for renders another configuration's bits: left out
+        # (light paths and guides are on only in scenes with mirror or glass objects).
+        configs = []
+        for c in OURS_CONFIGS:
+            if any(same_images(c, e) for e in configs):
+                continue
+            configs.append(c)
 
-        # Each sampler's errors next to its crossing measured, not read off the ladder's
-        # line (`refine`); the time a sample stays its top count's.
-        ours_err = {s: refine([(n, e) for n, _, e in ours_pts[s]], target,
-                              measured(lambda spp, s=s: ours_render(s, spp)), ours_between)
-                    for s in candidates}
-        mi_err = {s: refine([(n, e) for n, _, e in mi_pts[s]], target,
-                            measured(lambda spp, s=s: mi_render(s, spp)), mi_between(s))
-                  for s in MI_SAMPLERS}
+        def ours_count(c):
+            return max(1, math.ceil(crossing(ours_err[c], target) - 1e-9))
 
-        def time_to(pts, err):
-            spp = crossing(err, target)
-            return spp, spp * pts[-1][1] / pts[-1][0]
+        def mi_count_at(s):
+            want = crossing(mi_err[s], target)
+            c = max(1, math.ceil(want - 1e-9))
+            while mi_count(s, c) < want - 1e-9:
+                c += 1
+            return c
 
-        ours_best = min(candidates, key=lambda s: time_to(ours_pts[s], ours_err[s])[1])
-        ours_spp, ours_t = time_to(ours_pts[ours_best], ours_err[ours_best])
-        best = min(MI_SAMPLERS, key=lambda s: time_to(mi_pts[s], mi_err[s])[1])
-        best_spp, best_t = time_to(mi_pts[best], mi_err[best])
-        # The same without adaptive sampling: a fixed count in every pixel, as Mitsuba's.
-        plain = [s for s in OURS_SAMPLERS if "adaptive" not in s.split(" ")]
-        plain_best = min(plain, key=lambda s: time_to(ours_pts[s], ours_err[s])[1])
-        plain_t = time_to(ours_pts[plain_best], ours_err[plain_best])[1]
-        px = size * size * top
-        ours_rate = px / ours_pts["independent"][-1][1] / 1e6
-        mi_rate = px / mi_pts["independent"][-1][1] / 1e6
-        # Every count measured (the ladder's and the refinement's), and what the ladder
-        # alone would have given (`ladder_*`), so that a run shows what refining moved.
-        errors = {f"ours {s}": ours_err.get(s) or [(n, e) for n, _, e in ours_pts[s]] for s in OURS_SAMPLERS}
-        errors.update({f"mitsuba {s}": mi_err[s] for s in MI_SAMPLERS})
-        ladder_only = lambda pts: time_to(pts, [(n, e) for n, _, e in pts])
-        (ladder_ours_spp, ladder_ours_t), (ladder_best_spp, ladder_best_t) = \
-            ladder_only(ours_pts[ours_best]), ladder_only(mi_pts[best])
-        ladder_ratio = ladder_ours_t / ladder_best_t
-        rows.append({"scene": name, "ours_msps": ours_rate, "mitsuba_msps": mi_rate, "ours_sampler": ours_best,
-                     "ours_spp": ours_spp, "ours_time": ours_t, "best_sampler": best, "best_spp": best_spp,
-                     "best_time": best_t, "ratio": ours_t / best_t, "plain_sampler": plain_best,
-                     "plain_time": plain_t, "plain_ratio": plain_t / best_t, "target_rmse": target,
-                     "reference_rmse": math.sqrt(floor2), "own_rmse_by_spp": errors,
-                     "ladder_ours_spp": ladder_ours_spp, "ladder_best_spp": ladder_best_spp,
-                     "ladder_ratio": ladder_ratio})
-        md.append(f"| {name} | {ours_rate:.2f} | {mi_rate:.2f} | {ours_best} | {ours_spp:.1f} | {ours_t:.3f} | {best} | "
-                  f"{best_spp:.1f} | {best_t:.3f} | {ours_t / best_t:.2f} | {plain_best} | {plain_t / best_t:.2f} | "
-                  f"{ladder_ratio:.2f} |")
-    return md, {"mitsuba": rows}
+        # Real renders at each crossing count, in alternating pairs.
+        ours_t = {c: [] for c in configs}
+        mi_t = {s: [] for s in MI_SAMPLERS}
+        for k in range(pairs):
+            for c in configs:
+                ours_t[c].append(ours_render(c, ours_count(c))[0])
+            for s in MI_SAMPLERS:
+                mi_t[s].append(mi_render(s, mi_count_at(s), seed=k, timed=True)[0])
+        ours_best = min(configs, key=lambda c: med(ours_t[c]))
+        best = min(MI_SAMPLERS, key=lambda s: med(mi_t[s]))
+        fixed = [c for c in configs if "adaptive" not in c.split(" ")]
+        fixed_best = min(fixed, key=lambda c: med(ours_t[c]))
+        ratios = [a / b for a, b in zip(ours_t[ours_best], mi_t[best])]
+        fixed_ratio = med(ours_t[fixed_best]) / med(mi_t[best])
+        rows.append({"scene": name, "catalog": name in CATALOG, "same_spp": same_spp,
+                     "ours_msps": ours_rate, "llvm_msps": llvm_rate, "scalar_msps": scalar_rate,
+                     "same_ratio": med(r_llvm), "same_spread": spread(r_llvm),
+                     "same_ratio_scalar": med(r_scalar), "same_spread_scalar": spread(r_scalar),
+                     "target_rmse": target, "reference_rmse": math.sqrt(floor2),
+                     "ours_best": ours_best, "ours_spp": ours_count(ours_best), "ours_time": med(ours_t[ours_best]),
+                     "mi_best": best, "mi_spp": mi_count(best, mi_count_at(best)), "mi_time": med(mi_t[best]),
+                     "best_ratio": med(ratios), "best_spread": spread(ratios),
+                     "fixed_best": fixed_best, "fixed_ratio": fixed_ratio,
+                     "ours_times": ours_t, "mi_times": mi_t,
+                     "errors": {**{f"ours {c}": ours_err[c] for c in OURS_CONFIGS},
+                                **{f"mitsuba {s}": mi_err[s] for s in MI_SAMPLERS}}})
+        r = rows[-1]
+        best_md.append(f"| {name} | {ours_best} | {r['ours_spp']} | {r['ours_time']:.3f} | {best} | {r['mi_spp']} | "
+                       f"{r['mi_time']:.3f} | {r['best_ratio']:.2f} ({r['best_spread']}) | {fixed_best} | "
+                       f"{fixed_ratio:.2f} |")
+    return md + best_md, {"mitsuba": rows}

@@ -5,7 +5,7 @@ import os
 import re
 import subprocess
 
-from peers_common import CONFORMANCE, RENDERER, run_timed, spread
+from peers_common import CONFORMANCE, RENDERER, med, run_timed, spread
 
 
 def whitted_scene(n, refl, w, h):
@@ -82,7 +82,6 @@ def povray(outdir, quick):
                 ow.append(a[0]); oc.append(a[1]); pw.append(b[0]); pc.append(b[1])
                 tr.append(float(m.group(1)) if m else float("nan"))
                 cr.append(a[1] / b[1])
-            med = lambda x: sorted(x)[len(x) // 2]
             rows.append({"n": n, "reflective": refl, "ours_wall": med(ow), "pov_wall": med(pw), "ours_cpu": med(oc),
                          "pov_cpu": med(pc), "cpu_ratio": med(cr), "pov_trace": med(tr)})
             md.append(f"| {n:,} | {refl} | {med(ow):.2f} | {med(pw):.2f} | {med(ow) / med(pw):.2f} | {med(oc):.2f} | {med(pc):.2f} | "

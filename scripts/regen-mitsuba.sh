@@ -4,7 +4,8 @@
 #   references/mitsuba/<scene>.geom.exr   pixel-centre geometry (distance, normal, hit mask)
 #   references/mitsuba/<scene>.exr        radiance through the `moment` integrator
 # recording tool, version, command, spp, scene hashes and date in references/manifest.toml.
-# Only the scalar_rgb variant is used: the llvm variants abort on these machines.
+# Rendered with Mitsuba's scalar_rgb variant, or for radiance with MITSUBA_VARIANT (for
+# llvm_ad_rgb, with DRJIT_LIBLLVM_PATH: conformance/docs/mitsuba.md).
 #
 #   scripts/regen-mitsuba.sh [FILTER] [--spp N]      regenerate (default 8192 spp)
 #   scripts/regen-mitsuba.sh --check [FILTER]        re-render into a temporary folder and

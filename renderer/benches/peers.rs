@@ -207,13 +207,21 @@ fn write_u32(path: &Path, data: impl Iterator<Item = u32>) {
     std::fs::write(path, bytes).unwrap();
 }
 
+/// What one ray's search stores, as Embree's `rtcIntersect1` and `rtcOccluded1` do: for a
+/// closest hit the distance and the primitive (`f32::INFINITY` and `u32::MAX` on a miss),
+/// for any hit whether there is one. Every ray's result is written to memory, so no part
+/// of a search can be optimised away, on our side or on Embree's.
+type Store<'a> = dyn Fn(&Ray, Real, &mut (f32, u32)) + Sync + 'a;
+
 /// Rays per second (millions) of `f` over `rays` on `threads` threads, repeated for at
-/// least `secs` seconds; returns (Mrays/s, hits).
+/// least `secs` seconds, each ray's result stored in `out`; returns (Mrays/s, the number
+/// of rays whose stored primitive is not `u32::MAX`).
 fn time_rays(
     rays: &[(Ray, Real)],
     threads: usize,
     secs: f64,
-    f: &(dyn Fn(&Ray, Real) -> bool + Sync),
+    out: &mut [(f32, u32)],
+    f: &Store<'_>,
 ) -> (f64, usize) {
     use rayon::prelude::*;
     let pool = rayon::ThreadPoolBuilder::new()
@@ -221,19 +229,24 @@ fn time_rays(
         .build()
         .unwrap();
     pool.install(|| {
-        let run = || {
+        let mut run = || {
             rays.par_chunks(4096)
-                .map(|c| c.iter().filter(|(r, t)| f(r, *t)).count())
-                .sum::<usize>()
+                .zip(out.par_chunks_mut(4096))
+                .for_each(|(c, o)| {
+                    for ((r, t), o) in c.iter().zip(o) {
+                        f(r, *t, o);
+                    }
+                })
         };
-        let hits = run();
+        run();
         let t0 = Instant::now();
         let mut n = 0usize;
         while t0.elapsed().as_secs_f64() < secs {
-            std::hint::black_box(run());
+            run();
             n += rays.len();
         }
-        (n as f64 / t0.elapsed().as_secs_f64() / 1e6, hits)
+        let rate = n as f64 / t0.elapsed().as_secs_f64() / 1e6;
+        (rate, out.iter().filter(|o| o.1 != u32::MAX).count())
     })
 }
 
@@ -263,12 +276,31 @@ fn mesh(dir: &Path, quick: bool) {
                 .iter()
                 .flat_map(|(r, t)| [r.o.x, r.o.y, r.o.z, r.d.x, r.d.y, r.d.z, *t]),
         );
-        let closest = |r: &Ray, t: Real| agg.intersect(r, 0.0, t).is_some();
-        let any = |r: &Ray, t: Real| agg.occluded(r, 0.0, t);
+        let closest = |r: &Ray, t: Real, o: &mut (f32, u32)| {
+            *o = match agg.intersect(r, 0.0, t) {
+                Some(h) => (h.t as f32, h.prim),
+                None => (f32::INFINITY, u32::MAX),
+            }
+        };
+        let any = |r: &Ray, t: Real, o: &mut (f32, u32)| {
+            o.1 = if agg.occluded(r, 0.0, t) { 0 } else { u32::MAX }
+        };
+        let mut stored = vec![(0f32, 0u32); set.rays.len()];
         let mut parts = Vec::new();
         for threads in [1, 2] {
-            let (c, hc) = time_rays(&set.rays, threads, secs, &closest);
-            let (a, ha) = time_rays(&set.rays, threads, secs, &any);
+            let (c, hc) = time_rays(&set.rays, threads, secs, &mut stored, &closest);
+            if threads == 1 {
+                // Our closest hits, for the script to compare with Embree's ray by ray.
+                write_f32(
+                    &dir.join(format!("ours_t_{}.f32", set.name)),
+                    stored.iter().map(|o| o.0 as Real),
+                );
+                write_u32(
+                    &dir.join(format!("ours_prim_{}.u32", set.name)),
+                    stored.iter().map(|o| o.1),
+                );
+            }
+            let (a, ha) = time_rays(&set.rays, threads, secs, &mut stored, &any);
             assert_eq!(hc, ha, "closest and any hit disagree on {}", set.name);
             parts.push(format!(
                 "{{\"threads\": {threads}, \"closest_mrays\": {c:.4}, \"any_mrays\": {a:.4}, \"hits\": {hc}}}"

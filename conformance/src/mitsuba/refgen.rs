@@ -77,9 +77,17 @@ pub fn render_mitsuba(
         file,
         spp,
     };
+    // A radiance reference rendered by another variant than scalar_rgb says so in its
+    // command (the variant is the script's MITSUBA_VARIANT, which the child inherits).
+    let variant = match std::env::var("MITSUBA_VARIANT") {
+        Ok(v) if !v.is_empty() && v != "scalar_rgb" => format!("MITSUBA_VARIANT={v} "),
+        _ => String::new(),
+    };
     Ok((
         record(
-            format!("python3 scripts/mitsuba_refs.py radiance {xml_name} {rad_file} {spp}"),
+            format!(
+                "{variant}python3 scripts/mitsuba_refs.py radiance {xml_name} {rad_file} {spp}"
+            ),
             format!("mitsuba/{rad_file}"),
             Some(spp),
         ),
