@@ -6,7 +6,10 @@
 # recording tool, version, command, spp, scene hashes and date in references/manifest.toml.
 # Only the scalar_rgb variant is used: the llvm variants abort on these machines.
 #
-#   scripts/regen-mitsuba.sh [FILTER] [--spp N]      regenerate (default 8192 spp)
+#   scripts/regen-mitsuba.sh [FILTER] [--spp N]      regenerate (default 8192 spp) the scenes
+#                                                    FILTER selects: a whole name (or
+#                                                    mitsuba::NAME) that scene alone, else
+#                                                    every scene whose name contains FILTER
 #   scripts/regen-mitsuba.sh --check [FILTER]        re-render into a temporary folder and
 #                                                    check against the committed files
 set -euo pipefail

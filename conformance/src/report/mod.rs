@@ -97,14 +97,7 @@ pub fn write(dir: &Path, judged: &[Judged]) -> Result<()> {
         write!(html, "<tr><td>{reference}</td>")?;
         for v in VERDICTS {
             let n = of.iter().filter(|j| j.verdict == v).count();
-            let class = match v {
-                Verdict::Pass => "pass",
-                Verdict::Waived if n > 0 => "waived",
-                Verdict::Waived => "",
-                _ if n > 0 => "fail",
-                _ => "",
-            };
-            write!(html, "<td class=\"{class}\">{n}</td>")?;
+            write!(html, "<td class=\"{}\">{n}</td>", count_class(v, n))?;
         }
         let stale: usize = of.iter().map(|j| j.stale_waivers.len()).sum();
         writeln!(html, "<td>{stale}</td><td>{}</td></tr>", of.len())?;
@@ -141,6 +134,26 @@ See conformance/docs/tolerances.md, mitsuba.md and workflows.md.</p>",
     let index = dir.join("index.html");
     std::fs::write(&index, html).with_context(|| format!("writing {}", index.display()))?;
     Ok(())
+}
+
+/// The colour of a summary count: green for scenes that pass, amber for waived ones, red
+/// for any other verdict; none for a count of 0 (no scene of a catalog run is no pass).
+fn count_class(v: Verdict, n: usize) -> &'static str {
+    match v {
+        _ if n == 0 => "",
+        Verdict::Pass => "pass",
+        Verdict::Waived => "waived",
+        _ => "fail",
+    }
+}
+
+/// A scene's metrics for its table cell: one line per measurement ([`table::metric_parts`]).
+fn metrics_html(metrics: &str) -> String {
+    table::metric_parts(metrics)
+        .iter()
+        .map(|p| html_escape(p))
+        .collect::<Vec<_>>()
+        .join("<br>")
 }
 
 fn scene_row(html: &mut String, dir: &Path, j: &Judged) -> Result<()> {
@@ -205,10 +218,36 @@ fn scene_row(html: &mut String, dir: &Path, j: &Judged) -> Result<()> {
     };
     writeln!(
         html,
-        "<tr id=\"{scene}\" class=\"{row_class}\"><td><a href=\"#{scene}\">{scene}</a><br>{reference}<br>{w}×{h}, ours {:.3} s</td><td>{images}</td><td>{third}</td><td><span class=\"{class}\">{}</span> against {reference}{fix}{notes}<br>{}</td></tr>",
+        "<tr id=\"{scene}\" class=\"{row_class}\"><td><a href=\"#{scene}\">{scene}</a><br>{reference}<br>{w}×{h}, rendered in {:.3} s</td><td>{images}</td><td>{third}</td><td><span class=\"{class}\">{}</span> against {reference}{fix}{notes}<br>{}</td></tr>",
         j.checked.seconds(),
         html_escape(&shown_verdict(j)),
-        html_escape(&j.checked.metrics()).replace("; ", "<br>")
+        metrics_html(&j.checked.metrics())
     )?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn test01_a_count_of_zero_is_not_green() {
+        assert_eq!(
+            count_class(Verdict::Pass, 0),
+            "",
+            "0 scenes shown as a pass"
+        );
+        assert_eq!(count_class(Verdict::Pass, 3), "pass");
+        assert_eq!(count_class(Verdict::Fail, 0), "");
+        assert_eq!(count_class(Verdict::Fail, 1), "fail");
+        assert_eq!(count_class(Verdict::Waived, 2), "waived");
+    }
+
+    #[test]
+    fn test02_a_semicolon_inside_parentheses_is_no_line_break() {
+        assert_eq!(
+            metrics_html("1 failing, 2 excused (2 outline; budget 40); geometry: <ok>"),
+            "1 failing, 2 excused (2 outline; budget 40)<br>geometry: &lt;ok&gt;"
+        );
+    }
 }
