@@ -25,7 +25,7 @@ target="${CARGO_TARGET_DIR:-target}"
 # A failing scene (exit 1) still writes the report: the gate judges the scenes, this checks
 # the page. Any other exit (a build error, a filter that matches nothing) stops here.
 set +e
-cargo run -q --release -p conformance -- run "${1:-}" >/dev/null
+cargo run -q -p conformance -- run "${1:-}" >/dev/null
 rc=$?
 set -e
 if [ "$rc" -gt 1 ]; then echo "conformance run failed (exit $rc)" >&2; exit "$rc"; fi

@@ -45,7 +45,7 @@ gate() {  # gate EXPECT: run the scene's test and require EXPECT (pass, fail, ig
 expect() { grep -qF -- "$1" "$log" || { echo "expected output to contain: $1"; cat "$log"; exit 1; }; }
 
 step "1. add a scene and generate its reference"
-cargo run -q --release -p conformance -- new-scene wf_demo --catalog povray
+cargo run -q -p conformance -- new-scene wf_demo --catalog povray
 gate pass
 
 step "2. regenerate a stale reference"
@@ -66,7 +66,7 @@ expect "povray/wf_demo: FAIL"
 expect "worst pixels"
 img="$(grep -o '/[^ ]*/failures/wf_demo/difference.png' "$log" | head -1)"
 [ -f "$img" ] || { echo "failure image $img does not exist"; cat "$log"; exit 1; }
-set +e; cargo run -q --release -p conformance -- run wf_demo >"$log" 2>&1; rc=$?; set -e
+set +e; cargo run -q -p conformance -- run wf_demo >"$log" 2>&1; rc=$?; set -e
 [ $rc -eq 1 ] || { echo "conformance run wf_demo should exit 1, got $rc"; cat "$log"; exit 1; }
 grep -q 'id="wf_demo"' "$CARGO_TARGET_DIR/conformance/index.html"
 

@@ -7,7 +7,10 @@
 # Rendered with Mitsuba's scalar_rgb variant, or for radiance with MITSUBA_VARIANT (for
 # llvm_ad_rgb, with DRJIT_LIBLLVM_PATH: conformance/docs/mitsuba.md).
 #
-#   scripts/regen-mitsuba.sh [FILTER] [--spp N]      regenerate (default 8192 spp)
+#   scripts/regen-mitsuba.sh [FILTER] [--spp N]      regenerate (default 8192 spp) the scenes
+#                                                    FILTER selects: a whole name (or
+#                                                    mitsuba::NAME) that scene alone, else
+#                                                    every scene whose name contains FILTER
 #   scripts/regen-mitsuba.sh --check [FILTER]        re-render into a temporary folder and
 #                                                    check against the committed files
 set -euo pipefail

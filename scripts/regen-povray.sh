@@ -4,7 +4,9 @@
 # references/povray/, and records tool, version, command, scene hashes and date in
 # references/manifest.toml.
 #
-#   scripts/regen-povray.sh [FILTER]           regenerate the scenes whose name contains FILTER
+#   scripts/regen-povray.sh [FILTER]           regenerate the scenes FILTER selects: a whole
+#                                              name (or povray::NAME) that scene alone, else
+#                                              every scene whose name contains FILTER
 #   scripts/regen-povray.sh --check [FILTER]   re-render from scratch into a temporary folder
 #                                              and check the result equals the committed files
 set -euo pipefail

@@ -1,6 +1,10 @@
 //! The catalog gate: one test per catalog scene, named `<reference>::<scene>`
 //! (`povray::prim_cone_shear`, `mitsuba::mi_cornell`), so `cargo test prim_cone` runs a
-//! subset and `cargo nextest run --partition count:K/N` shards the catalog.
+//! subset and `cargo nextest run --partition count:K/N` shards the catalog. A filter
+//! selects scenes as `conformance run` does (`catalog::select_in`): a scene's whole name
+//! runs that scene alone (`shade_phong`, not `shade_phong_size`), a part of names runs every
+//! scene whose name contains it; a filter that names no scene is libtest's substring
+//! filter over the test names, and `--exact` is libtest's.
 //!
 //! A scene that does not pass prints its verdict and metrics, its worst pixels, the
 //! failure images it wrote under `$CARGO_TARGET_DIR/conformance/failures/<scene>/`, and
@@ -10,7 +14,7 @@
 //! removed. The catalog-wide checks (coverage, staleness, perturbations) are in
 //! `povray_gate.rs` and `mitsuba_gate.rs`.
 
-use conformance::catalog::{repo_root, scenes};
+use conformance::catalog::{repo_root, scenes, select_in};
 use conformance::gate::{check, failure_dir, REFERENCES};
 use conformance::manifest::Manifest;
 use conformance::verdict::Verdict;
@@ -19,7 +23,7 @@ use libtest_mimic::{Arguments, Completion, Failed, Trial};
 use std::sync::Arc;
 
 fn main() {
-    let args = Arguments::from_args();
+    let mut args = Arguments::from_args();
     let manifest = Arc::new(
         Manifest::load(&repo_root().join("references/manifest.toml"))
             .expect("references/manifest.toml must load"),
@@ -80,5 +84,19 @@ fn main() {
             }
         },
     ));
+    if let Some(filter) = args.filter.clone().filter(|_| !args.exact) {
+        if let Ok(chosen) = select_in(&REFERENCES, &filter) {
+            let names: Vec<String> = chosen
+                .iter()
+                .map(|(r, e)| format!("{r}::{}", e.name))
+                .collect();
+            let scene_test = |n: &str| REFERENCES.iter().any(|r| n.starts_with(&format!("{r}::")));
+            trials.retain(|t| {
+                let n = t.name();
+                names.iter().any(|c| c == n) || (!scene_test(n) && n.contains(&filter))
+            });
+            args.filter = None;
+        }
+    }
     libtest_mimic::run(&args, trials).exit();
 }

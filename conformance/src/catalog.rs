@@ -50,27 +50,68 @@ pub fn scenes(reference: &str, filter: &str) -> std::io::Result<Vec<Entry>> {
     Ok(v)
 }
 
-/// The scenes of `reference` that a command line's FILTER selects: the scene of exactly
-/// that name if there is one, else every scene whose name contains it. An empty selection
-/// is an error that lists close names.
+/// The scenes of `reference` that a command line's FILTER selects ([`select_in`]).
 pub fn select(reference: &str, filter: &str) -> Result<Vec<Entry>> {
-    let all = scenes(reference, "")
-        .with_context(|| format!("reading conformance/scenes/{reference}/"))?;
-    if let Some(e) = all.iter().find(|e| e.name == filter) {
-        return Ok(vec![e.clone()]);
+    Ok(select_in(&[reference], filter)?
+        .into_iter()
+        .map(|(_, e)| e)
+        .collect())
+}
+
+/// The scenes of the catalogs `references` that a command line's FILTER selects, with
+/// their catalog, in catalog then name order. The same rules everywhere (`conformance
+/// run`, the regeneration commands, the catalog test's filter; conformance/docs/workflows.md):
+/// - `CATALOG::NAME` (a test's name, `povray::shade_phong`) looks in that catalog only,
+///   with NAME as the filter;
+/// - a FILTER that is a scene's whole name selects that scene alone (`shade_phong`, not
+///   also `shade_phong_size`);
+/// - any other FILTER selects every scene whose name contains it (empty: every scene).
+///
+/// An empty selection is an error that lists close names.
+pub fn select_in<'r>(references: &[&'r str], filter: &str) -> Result<Vec<(&'r str, Entry)>> {
+    let (references, name) = match filter.split_once("::") {
+        Some((catalog, name)) => {
+            let Some(r) = references.iter().find(|r| **r == catalog) else {
+                anyhow::bail!(
+                    "'{filter}': no catalog named '{catalog}' here (catalogs: {})",
+                    references.join(", ")
+                );
+            };
+            (std::slice::from_ref(r), name)
+        }
+        None => (references, filter),
+    };
+    let mut all = Vec::new();
+    for reference in references {
+        for e in scenes(reference, "")
+            .with_context(|| format!("reading conformance/scenes/{reference}/"))?
+        {
+            all.push((*reference, e));
+        }
     }
-    let chosen: Vec<Entry> = all
+    let exact = all.iter().any(|(_, e)| e.name == name);
+    let chosen: Vec<(&'r str, Entry)> = all
         .iter()
-        .filter(|e| e.name.contains(filter))
+        .filter(|(_, e)| {
+            if exact {
+                e.name == name
+            } else {
+                e.name.contains(name)
+            }
+        })
         .cloned()
         .collect();
     if chosen.is_empty() {
-        let names: Vec<String> = all.into_iter().map(|e| e.name).collect();
-        let close = close_names(filter, &names);
+        let names: Vec<String> = all.into_iter().map(|(_, e)| e.name).collect();
+        let close = close_names(name, &names);
+        let folders: Vec<String> = references
+            .iter()
+            .map(|r| format!("conformance/scenes/{r}/"))
+            .collect();
         anyhow::bail!(
-            "no {reference} catalog scene matches '{filter}'{}",
+            "no catalog scene matches '{filter}'{}",
             if close.is_empty() {
-                format!(" (the catalog is conformance/scenes/{reference}/)")
+                format!(" (the catalogs are {})", folders.join(" and "))
             } else {
                 format!("; close names: {}", close.join(", "))
             }
@@ -95,9 +136,11 @@ pub fn scratch_dir(name: &str) -> Result<PathBuf> {
     Ok(d)
 }
 
-/// Names of `candidates` close to `wanted` (sharing a word or within a small edit
-/// distance), best first: for "no scene matches" messages.
+/// Names of `candidates` close to `wanted` (a part of the name, or the whole name, within
+/// the edit distance `renderer::suggest` allows), best first: for "no scene matches"
+/// messages.
 pub fn close_names<'a>(wanted: &str, candidates: &'a [String]) -> Vec<&'a str> {
+    use renderer::suggest::{edit_distance, max_distance};
     let mut scored: Vec<(usize, &str)> = candidates
         .iter()
         .filter_map(|c| {
@@ -107,28 +150,11 @@ pub fn close_names<'a>(wanted: &str, candidates: &'a [String]) -> Vec<&'a str> {
                 .min()
                 .unwrap_or(usize::MAX)
                 .min(edit_distance(wanted, c));
-            let limit = (wanted.len() / 3).max(1);
-            (d <= limit).then_some((d, c.as_str()))
+            (d <= max_distance(wanted)).then_some((d, c.as_str()))
         })
         .collect();
     scored.sort();
     scored.into_iter().map(|(_, c)| c).take(8).collect()
-}
-
-/// Levenshtein distance.
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut prev: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut cur = vec![i + 1; b.len() + 1];
-        for (j, cb) in b.iter().enumerate() {
-            cur[j + 1] = (prev[j] + (ca != *cb) as usize)
-                .min(prev[j + 1] + 1)
-                .min(cur[j] + 1);
-        }
-        prev = cur;
-    }
-    prev[b.len()]
 }
 
 #[cfg(test)]
@@ -152,5 +178,57 @@ mod tests {
         assert_eq!(close_names("shade_phnog", &names), ["shade_phong"]);
         assert_eq!(close_names("cornel", &names), ["mi_cornell"]);
         assert!(close_names("typo", &names).is_empty());
+    }
+
+    /// The names `select_in` picks from the committed catalogs for `filter`, as
+    /// `catalog::name`, or the error's text.
+    fn picked(filter: &str) -> Result<Vec<String>, String> {
+        select_in(&["povray", "mitsuba"], filter)
+            .map(|v| {
+                v.into_iter()
+                    .map(|(r, e)| format!("{r}::{}", e.name))
+                    .collect()
+            })
+            .map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn test02_a_filter_means_one_thing() {
+        // A whole name: that scene alone, though another name contains it.
+        assert_eq!(picked("shade_phong").unwrap(), ["povray::shade_phong"]);
+        // A test's name: the catalog, then the same rules.
+        assert_eq!(
+            picked("povray::shade_phong").unwrap(),
+            ["povray::shade_phong"]
+        );
+        assert_eq!(
+            picked("povray::shade_phong_").unwrap(),
+            ["povray::shade_phong_size"]
+        );
+        // A part of names: every scene that contains it, in catalog and name order.
+        let cones = picked("prim_cone").unwrap();
+        assert!(cones.len() > 1, "{cones:?}");
+        assert!(
+            cones.iter().all(|c| c.starts_with("povray::prim_cone")),
+            "{cones:?}"
+        );
+        assert!(cones.windows(2).all(|w| w[0] < w[1]), "{cones:?}");
+        // The empty filter: every scene of both catalogs.
+        let all = picked("").unwrap();
+        assert!(
+            all.iter().any(|n| n.starts_with("mitsuba::")),
+            "{}",
+            all.len()
+        );
+        // Nothing matches: an error with close names, or the catalogs.
+        let e = picked("mitsuba::shade_phong").unwrap_err();
+        assert!(
+            e.contains("close names: ") || e.contains("conformance/scenes/mitsuba/"),
+            "{e}"
+        );
+        let e = picked("shade_phnog").unwrap_err();
+        assert!(e.contains("close names: shade_phong"), "{e}");
+        let e = picked("blender::x").unwrap_err();
+        assert!(e.contains("no catalog named 'blender'"), "{e}");
     }
 }

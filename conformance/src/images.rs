@@ -7,11 +7,13 @@ use std::path::Path;
 
 /// Writes 8-bit RGB pixels as a PNG.
 pub fn save_png(path: &Path, w: u32, h: u32, rgb8: Vec<u8>) -> Result<()> {
-    let img = image::RgbImage::from_raw(w, h, rgb8)
-        .ok_or_else(|| anyhow::anyhow!("image size mismatch"))?;
-    img.save(path)
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+    let write = || -> Result<()> {
+        let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
+        renderer::output::encode_png_rgb8(&mut f, w, h, &rgb8)?;
+        std::io::Write::flush(&mut f)?;
+        Ok(())
+    };
+    write().with_context(|| format!("writing {}", path.display()))
 }
 
 /// An image holding `rgb` (no AOVs).

@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use conformance::catalog::{repo_root, scenes, select};
+use conformance::catalog::{repo_root, select, select_in};
 use conformance::gate::{self, REFERENCES};
 use conformance::manifest::Manifest;
 use conformance::waivers::Waivers;
@@ -24,7 +24,9 @@ enum Cmd {
     /// $CARGO_TARGET_DIR/conformance/index.html (default target/). Exits 1 unless every
     /// scene passes or is waived, 2 when the filter matches no scene.
     Run {
-        /// Only scenes whose name contains this.
+        /// Which scenes: a scene's name (that scene alone), `povray::NAME` or
+        /// `mitsuba::NAME` (one catalog), or a part of names (every scene whose name
+        /// contains it). Empty: every scene.
         #[arg(default_value = "")]
         filter: String,
     },
@@ -73,7 +75,7 @@ enum Cmd {
     },
     /// Regenerate Mitsuba references (needs `pip install mitsuba`; see scripts/regen-mitsuba.sh).
     RegenMitsuba {
-        /// Only scenes whose name contains this.
+        /// Which scenes, as for `run`.
         #[arg(default_value = "")]
         filter: String,
         /// Samples per pixel of the radiance references.
@@ -86,7 +88,7 @@ enum Cmd {
     },
     /// Regenerate POV-Ray references (needs povray; see scripts/regen-povray.sh).
     RegenPovray {
-        /// Only scenes whose name contains this.
+        /// Which scenes, as for `run`.
         #[arg(default_value = "")]
         filter: String,
         /// Render into a temporary folder and check that the result equals the committed
@@ -116,28 +118,19 @@ fn run() -> Result<ExitCode> {
             let root = repo_root();
             let manifest = Manifest::load(&root.join("references/manifest.toml"))?;
             let waivers = Waivers::committed()?;
+            let chosen = match select_in(&REFERENCES, &filter) {
+                Ok(c) => c,
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    return Ok(ExitCode::from(2));
+                }
+            };
             let mut judged = Vec::new();
-            let mut all = Vec::new();
-            for reference in REFERENCES {
-                for e in scenes(reference, "")? {
-                    all.push(e.name.clone());
-                    if e.name.contains(&filter) {
-                        judged.push(
-                            gate::check(reference, &e, &manifest, &waivers)
-                                .with_context(|| format!("{reference}/{}", e.name))?,
-                        );
-                    }
-                }
-            }
-            if judged.is_empty() {
-                let close = conformance::catalog::close_names(&filter, &all);
-                eprintln!("error: no catalog scene matches '{filter}'");
-                if close.is_empty() {
-                    eprintln!("the catalogs are conformance/scenes/povray/ and conformance/scenes/mitsuba/");
-                } else {
-                    eprintln!("close names: {}", close.join(", "));
-                }
-                return Ok(ExitCode::from(2));
+            for (reference, e) in &chosen {
+                judged.push(
+                    gate::check(reference, e, &manifest, &waivers)
+                        .with_context(|| format!("{reference}/{}", e.name))?,
+                );
             }
             print!("{}", conformance::report::table(&judged));
             for j in judged.iter().filter(|j| !j.accepted()) {

@@ -14,6 +14,7 @@ pub mod material;
 pub mod output;
 pub mod pages;
 pub mod physical;
+pub mod progress;
 pub mod ray;
 pub mod real;
 pub mod render;
@@ -22,6 +23,7 @@ pub mod scene;
 pub mod shading;
 pub mod shapes;
 pub mod spawn;
+pub mod suggest;
 pub mod transform;
 
 pub use aggregate::Shape;

@@ -3,7 +3,7 @@
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use renderer::output::{self, ToneMap};
-use renderer::render::{self, Options};
+use renderer::render::{self, Options, Progress};
 use renderer::scene::build::Overrides;
 use renderer::scene::Scene;
 use renderer::spawn::Spawn;
@@ -29,9 +29,13 @@ enum Cmd {
         /// Add geometry channels to the EXR: Z, N.X/Y/Z, P.X/Y/Z, objectId.
         #[arg(long)]
         aov: bool,
-        /// Worker threads (default: every core).
-        #[arg(long)]
-        threads: Option<usize>,
+        /// Worker threads; 0 (the default) uses every core. At most 1024.
+        #[arg(long, value_name = "N", default_value_t = 0, value_parser = parse_threads)]
+        threads: usize,
+        /// Progress on stderr: a bar when stderr is a terminal (auto), always the bar, a
+        /// plain line every 10 % (for logs and pipes), or none.
+        #[arg(long, value_enum, default_value_t = Progress::Auto)]
+        progress: Progress,
         /// How PNG output maps intensities to 8 bits.
         #[arg(long, value_enum, default_value_t = ToneMap::Srgb)]
         map: ToneMap,
@@ -65,6 +69,23 @@ fn parse_spawn(s: &str) -> Result<Spawn, String> {
             .map(Spawn::Fixed)
             .ok_or_else(|| format!("'{s}': expected robust, none or fixed=EPS")),
     }
+}
+
+/// The most render threads `--threads` accepts: rendering gains nothing from more threads
+/// than cores, and each thread reserves 64 MiB of address space for its stack.
+const MAX_THREADS: usize = 1024;
+
+fn parse_threads(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .parse()
+        .map_err(|e| format!("'{s}' is not a whole number of threads ({e})"))?;
+    if n > MAX_THREADS {
+        return Err(format!(
+            "{n} threads is more than the limit of {MAX_THREADS} (this machine has {} cores; 0 uses them all)",
+            std::thread::available_parallelism().map_or(1, |c| c.get())
+        ));
+    }
+    Ok(n)
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -116,6 +137,7 @@ fn run() -> Result<()> {
             output: out,
             aov,
             threads,
+            progress,
             map,
             spawn,
             spp,
@@ -133,6 +155,8 @@ fn run() -> Result<()> {
                 out.display()
             );
             anyhow::ensure!(!aov || ext == "exr", "--aov needs an .exr output");
+            // Before the render, not after it.
+            output::check_folder(&out)?;
             let overrides = Overrides {
                 size,
                 samples: spp,
@@ -143,20 +167,19 @@ fn run() -> Result<()> {
             let t0 = std::time::Instant::now();
             let opts = Options {
                 aov,
-                progress: true,
+                progress,
                 spawn,
                 ..Options::default()
             };
             // Render threads with stacks deep enough for the deepest scene the build accepts.
             let mut pool = rayon::ThreadPoolBuilder::new().stack_size(render::STACK_SIZE);
-            if let Some(n) = threads {
-                pool = pool.num_threads(n.max(1));
-            }
+            // rayon reads 0 as every core.
+            pool = pool.num_threads(threads);
             let img = pool
                 .build()
                 .map_err(|e| match threads {
-                    Some(n) => anyhow::anyhow!("--threads {n}: cannot start {n} threads ({e})"),
-                    None => anyhow::anyhow!("cannot start the render threads ({e})"),
+                    0 => anyhow::anyhow!("cannot start the render threads ({e})"),
+                    n => anyhow::anyhow!("--threads {n}: cannot start {n} threads ({e})"),
                 })?
                 .install(|| render::render(&s, &opts));
             let secs = t0.elapsed().as_secs_f64();

@@ -204,6 +204,7 @@ pub fn write(img: &Image, path: &Path, map: ToneMap) -> Result<()> {
             path.display()
         );
     }
+    check_folder(path)?;
     remove_stale_temp_files(path);
     let tmp = TempFile::create(path)?;
     let delay = SLOW_WRITE_MS.load(std::sync::atomic::Ordering::Relaxed);
@@ -221,6 +222,28 @@ pub fn write(img: &Image, path: &Path, map: ToneMap) -> Result<()> {
         .map_err(|e| e.into_error())
         .with_context(|| format!("cannot write {}", tmp.path.display()))?;
     tmp.persist(path)
+}
+
+/// Checks that the folder an output goes into exists (the CLI calls this before it
+/// renders), so the error names that folder rather than the temp file beside the output.
+pub fn check_folder(path: &Path) -> Result<()> {
+    let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) else {
+        return Ok(()); // The working directory.
+    };
+    match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => Ok(()),
+        Ok(_) => bail!("{}: {} is not a folder", path.display(), dir.display()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => bail!(
+            "{}: the folder {} does not exist (create it first)",
+            path.display(),
+            dir.display()
+        ),
+        Err(e) => bail!(
+            "{}: cannot use the folder {}: {e}",
+            path.display(),
+            dir.display()
+        ),
+    }
 }
 
 fn temp_path(path: &Path) -> PathBuf {
@@ -264,10 +287,30 @@ fn remove_stale_temp_files(path: &Path) {
 }
 
 fn encode_png(img: &Image, w: &mut impl std::io::Write, map: ToneMap) -> Result<()> {
-    let buf = image::RgbImage::from_raw(img.width, img.height, to_rgb8(img, map))
-        .context("image size mismatch")?;
-    let enc = image::codecs::png::PngEncoder::new(w);
-    buf.write_with_encoder(enc)?;
+    encode_png_rgb8(w, img.width, img.height, &to_rgb8(img, map))
+}
+
+/// Encodes 8-bit RGB pixels (`width · height · 3` bytes, rows top to bottom) as a PNG, with
+/// the `png` crate's balanced compression and adaptive filtering.
+pub fn encode_png_rgb8(
+    w: &mut impl std::io::Write,
+    width: u32,
+    height: u32,
+    rgb8: &[u8],
+) -> Result<()> {
+    anyhow::ensure!(
+        rgb8.len() as u64 == width as u64 * height as u64 * 3,
+        "{} bytes of RGB for a {width} × {height} image",
+        rgb8.len()
+    );
+    let mut enc = png::Encoder::new(w, width, height);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.set_compression(png::Compression::Balanced);
+    enc.set_filter(png::Filter::Adaptive);
+    let mut writer = enc.write_header()?;
+    writer.write_image_data(rgb8)?;
+    writer.finish()?;
     Ok(())
 }
 
@@ -416,29 +459,33 @@ mod write_tests {
     #[test]
     fn a_full_disk_is_an_error_for_every_format() {
         let img = image();
-        for limit in [0, 100, 2000] {
-            let mut w = std::io::BufWriter::new(Full {
-                data: Vec::new(),
-                pos: 0,
-                limit,
-            });
-            let png = encode_png(&img, &mut w, ToneMap::Srgb).and_then(|()| {
-                w.into_inner()
-                    .map(|_| ())
-                    .map_err(|e| e.into_error().into())
-            });
-            assert!(png.is_err(), "PNG with {limit} bytes free must fail");
-            let mut w = std::io::BufWriter::new(Full {
-                data: Vec::new(),
-                pos: 0,
-                limit,
-            });
-            let exr = encode_exr(&img, &mut w).and_then(|()| {
-                w.into_inner()
-                    .map(|_| ())
-                    .map_err(|e| e.into_error().into())
-            });
-            assert!(exr.is_err(), "EXR with {limit} bytes free must fail");
+        type Encode = fn(&Image, &mut std::io::BufWriter<Full>) -> Result<()>;
+        let formats: [(&str, Encode); 2] = [
+            ("PNG", |img, w| encode_png(img, w, ToneMap::Srgb)),
+            ("EXR", |img, w| encode_exr(img, w)),
+        ];
+        for (name, encode) in formats {
+            // Any room short of the whole file must fail; the whole file's room must not.
+            let write = |limit: usize| {
+                let mut w = std::io::BufWriter::new(Full {
+                    data: Vec::new(),
+                    pos: 0,
+                    limit,
+                });
+                encode(&img, &mut w).and_then(|()| {
+                    w.into_inner()
+                        .map(|f| f.data.len())
+                        .map_err(|e| e.into_error().into())
+                })
+            };
+            let size = write(usize::MAX).expect("room enough");
+            for limit in [0, 100, size / 2, size - 1] {
+                assert!(
+                    write(limit).is_err(),
+                    "{name} of {size} bytes with {limit} bytes free must fail"
+                );
+            }
+            assert_eq!(write(size).ok(), Some(size), "{name} with just enough room");
         }
     }
 }

@@ -4,6 +4,8 @@
 use crate::adaptive;
 use crate::hit::Hit;
 use crate::physical::PhysicalIntegrator;
+pub use crate::progress::Progress;
+use crate::progress::Reporter;
 use crate::ray::Ray;
 use crate::real::{dvec3, Real, Vec3};
 use crate::sampler::PixelSampler;
@@ -72,8 +74,8 @@ pub struct Options {
     pub threads: Option<usize>,
     /// Compute the geometry channels.
     pub aov: bool,
-    /// Show a progress bar (only when stderr is a terminal).
-    pub progress: bool,
+    /// How to report progress on stderr (none by default).
+    pub progress: Progress,
     /// Self-intersection strategy.
     pub spawn: Spawn,
     /// Samples per pixel, overriding the scene's `render.samples`.
@@ -137,7 +139,7 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
     } else {
         None
     };
-    let bar = progress_bar(h as u64 * (1 + pilot.is_some() as u64), opts.progress);
+    let bar = Reporter::start(opts.progress, h as u64 * (1 + pilot.is_some() as u64));
     let mut rgb = vec![0f32; w * h * 3];
     let mut moments = opts.moments.then(|| vec![0f32; w * h * 6]);
     let mut aov = opts.aov.then(|| Aov {
@@ -175,9 +177,7 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
                             bad += write_pixel(row, mrow, i, n, sum, sq);
                         },
                     );
-                    if let Some(b) = &bar {
-                        b.inc(1);
-                    }
+                    bar.row_done();
                     bad
                 })
                 .sum(),
@@ -193,9 +193,7 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
     if let Some(a) = aov.as_mut() {
         fill_aov(scene, a, w);
     }
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
+    bar.finish();
     Image {
         width: w as u32,
         height: h as u32,
@@ -247,7 +245,7 @@ fn render_adaptive(
     pilot: u32,
     rgb: &mut [f32],
     moment_rows: Vec<&mut [f32]>,
-    bar: &Option<indicatif::ProgressBar>,
+    bar: &Reporter,
 ) -> (usize, u64) {
     let w = t.w;
     let h = rgb.len() / (3 * w.max(1));
@@ -285,9 +283,7 @@ fn render_adaptive(
                     }
                 },
             );
-            if let Some(b) = bar {
-                b.inc(1);
-            }
+            bar.row_done();
         });
     drop(sq_rows);
     let extra =
@@ -331,9 +327,7 @@ fn render_adaptive(
                 bad += finish(row, mrow, i_next, 0, Color::ZERO, &[0.0; 6]);
                 i_next += 1;
             }
-            if let Some(b) = bar {
-                b.inc(1);
-            }
+            bar.row_done();
             bad
         })
         .sum();
@@ -563,18 +557,4 @@ fn fill_aov(scene: &Scene, a: &mut Aov, w: usize) {
                 id[i] = hit.object_id as f32;
             }
         });
-}
-
-fn progress_bar(rows: u64, wanted: bool) -> Option<indicatif::ProgressBar> {
-    use std::io::IsTerminal;
-    if !wanted || !std::io::stderr().is_terminal() {
-        return None;
-    }
-    let bar = indicatif::ProgressBar::new(rows);
-    if let Ok(style) = indicatif::ProgressStyle::with_template(
-        "{bar:40} {pos}/{len} rows, {elapsed} elapsed, ETA {eta}",
-    ) {
-        bar.set_style(style);
-    }
-    Some(bar)
 }

@@ -154,3 +154,129 @@ fn test04_every_option_of_render_help_is_documented() {
 document: add a row to its option table (value, default, meaning)"
     );
 }
+
+fn stderr_of(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn test05_threads_zero_is_every_core_and_too_many_are_refused() {
+    check(
+        "threads0",
+        &["--threads", "0", "--size", "8x6"],
+        true,
+        "8x6 px",
+    );
+    // Far more threads than any machine's cores: refused before the scene is read, not
+    // 100,000 operating-system threads started.
+    let t0 = std::time::Instant::now();
+    check(
+        "threads-many",
+        &["--threads", "100000"],
+        false,
+        "100000 threads is more than the limit of 1024",
+    );
+    assert!(
+        t0.elapsed().as_secs() < 30,
+        "refusing --threads 100000 took {:?}",
+        t0.elapsed()
+    );
+    check(
+        "threads-max",
+        &["--threads", "1024", "--size", "8x6"],
+        true,
+        "8x6 px",
+    );
+}
+
+#[test]
+fn test06_a_missing_output_folder_is_named_before_the_render() {
+    let dir = scratch("nofolder");
+    let out = dir.join("not/there/out.png");
+    let o = run(&["render", SCENE, "-o", out.to_str().unwrap()]);
+    let err = stderr_of(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!(
+            "the folder {} does not exist",
+            dir.join("not/there").display()
+        )),
+        "the error should name the missing folder: {err}"
+    );
+    assert!(
+        !err.contains(".tmp"),
+        "the error names the temp file: {err}"
+    );
+    assert!(
+        !err.contains(" px, "),
+        "the scene was rendered before the folder was checked: {err}"
+    );
+}
+
+#[test]
+fn test07_a_missing_scene_file_has_no_made_up_location() {
+    let dir = scratch("noscene");
+    let o = run(&[
+        "render",
+        "nothere.toml",
+        "-o",
+        dir.join("out.png").to_str().unwrap(),
+    ]);
+    assert_eq!(
+        stderr_of(&o).trim_end(),
+        "error: nothere.toml: cannot read the scene file: No such file or directory (os error 2)"
+    );
+}
+
+#[test]
+fn test08_progress_plain_prints_a_line_per_tenth_and_auto_is_silent_in_a_pipe() {
+    let dir = scratch("progress");
+    let out = dir.join("out.png");
+    let args = |mode: &'static str| {
+        [
+            "render",
+            SCENE,
+            "-o",
+            out.to_str().unwrap(),
+            "--size",
+            "16x40",
+            "--progress",
+            mode,
+        ]
+        .map(String::from)
+    };
+    let o = Command::new(env!("CARGO_BIN_EXE_renderer"))
+        .args(args("plain"))
+        .output()
+        .unwrap();
+    let err = stderr_of(&o);
+    assert!(o.status.success(), "{err}");
+    let lines: Vec<&str> = err
+        .lines()
+        .filter(|l| l.starts_with("progress: "))
+        .collect();
+    let expected: Vec<String> = (1..=10)
+        .map(|k| format!("progress: {} % ({}/40 rows), ", k * 10, k * 4))
+        .collect();
+    assert_eq!(lines.len(), 10, "one line per tenth of the rows: {err}");
+    for (line, want) in lines.iter().zip(&expected) {
+        assert!(
+            line.starts_with(want.as_str()),
+            "{line:?} should start {want:?}: {err}"
+        );
+    }
+    // The test's stderr is a pipe: auto shows nothing, and neither does none.
+    for mode in ["auto", "none"] {
+        let o = Command::new(env!("CARGO_BIN_EXE_renderer"))
+            .args(args(mode))
+            .output()
+            .unwrap();
+        let err = stderr_of(&o);
+        assert!(o.status.success(), "{err}");
+        assert_eq!(
+            err.lines().count(),
+            1,
+            "--progress {mode} into a pipe: {err}"
+        );
+    }
+}

@@ -130,9 +130,19 @@ fn test04_png_and_exr_outputs() {
     output::write(&img, &png, ToneMap::Srgb).unwrap();
     output::write(&img, &exr, ToneMap::Srgb).unwrap();
 
-    let decoded = image::open(&png).unwrap().to_rgb8();
-    assert_eq!(decoded.dimensions(), (img.width, img.height));
-    assert_eq!(decoded.as_raw(), &output::to_rgb8(&img, ToneMap::Srgb));
+    let file = std::io::BufReader::new(std::fs::File::open(&png).unwrap());
+    let mut reader = png::Decoder::new(file).read_info().unwrap();
+    let mut decoded = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut decoded).unwrap();
+    assert_eq!((info.width, info.height), (img.width, img.height));
+    assert_eq!(
+        (info.color_type, info.bit_depth),
+        (png::ColorType::Rgb, png::BitDepth::Eight)
+    );
+    assert_eq!(
+        &decoded[..info.buffer_size()],
+        &output::to_rgb8(&img, ToneMap::Srgb)
+    );
 
     let e = read_exr(&exr).unwrap();
     assert_eq!(

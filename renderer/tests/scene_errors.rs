@@ -51,7 +51,7 @@ fn test01_syntax_error_has_a_position() {
 #[test]
 fn test02_unknown_field_is_rejected() {
     let text = format!("{CAMERA}\n[[objects]]\ntype = \"sphere\"\nradius = 2\n");
-    check(&text, 15, "objects[0].radius", "unknown field `radius`");
+    check(&text, 15, "objects[0].radius", "unknown key `radius`");
 }
 
 #[test]
@@ -63,7 +63,7 @@ fn test03_wrong_type_names_the_field() {
 #[test]
 fn test04_unknown_shape_type() {
     let text = format!("{CAMERA}\n[[objects]]\ntype = \"torus\"\n");
-    check(&text, 14, "objects[0].type", "unknown variant `torus`");
+    check(&text, 14, "objects[0].type", "unknown value `torus`");
 }
 
 #[test]
@@ -205,7 +205,13 @@ fn test11b_models_must_match_the_integrator() {
 #[test]
 fn test12_missing_file_is_an_error_not_a_panic() {
     let e = Scene::load(Path::new("/no/such/scene.toml")).unwrap_err();
-    assert!(e.to_string().contains("/no/such/scene.toml"), "{e}");
+    // The file and the system's reason, and no line, column or field: there is none.
+    assert_eq!(
+        e.to_string(),
+        "/no/such/scene.toml: cannot read the scene file: No such file or directory (os error 2)",
+        "the message of a scene file that is not there"
+    );
+    assert_eq!((e.line, e.column), (0, 0), "{e}");
 }
 
 /// The command line: a bad scene exits with status 2, prints the located error, and writes
@@ -371,4 +377,109 @@ fn test24_a_mesh_that_is_not_a_regular_file_is_refused() {
     .expect_err("/dev/zero is not a mesh");
     assert!(e.message.contains("not a regular file"), "{e}");
     assert_eq!(e.field, "objects[0].file");
+}
+
+/// A scene file in a scratch folder, for errors that need a real file (meshes).
+fn scratch_scene(name: &str, text: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("renderer-errors-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn test25_a_missing_mesh_names_where_it_was_looked_for() {
+    // Mesh paths are relative to the scene file, not to the working directory: the error
+    // gives the path as written and the path it resolved to.
+    let path = scratch_scene(
+        "mesh",
+        &format!("{CAMERA}\n[[objects]]\ntype = \"mesh\"\nfile = \"meshes/gone.obj\"\n"),
+    );
+    let e = Scene::load(&path).expect_err("the mesh is not there");
+    let resolved = path.parent().unwrap().join("meshes/gone.obj");
+    assert_eq!((e.line, e.field.as_str()), (15, "objects[0].file"), "{e}");
+    assert!(
+        e.message.contains("'meshes/gone.obj'")
+            && e.message
+                .contains(&format!("looked for at {}", resolved.display())),
+        "the message should give the path as written and as resolved ({}): {e}",
+        resolved.display()
+    );
+    std::fs::remove_dir_all(path.parent().unwrap()).unwrap();
+}
+
+#[test]
+fn test26_misspelt_names_get_a_suggestion() {
+    // Materials, definitions, keys (camera tables and transform operations included) and
+    // enum values: one wording, and the closest names from the same edit-distance code.
+    let shiny = "[materials.shiny]\nphong = 0.5\n";
+    let text =
+        format!("{CAMERA}\n{shiny}\n[[objects]]\ntype = \"sphere\"\nmaterial = \"shinny\"\n");
+    check(
+        &text,
+        18,
+        "objects[0].material",
+        "no material named 'shinny' (did you mean 'shiny'?)",
+    );
+    let text = format!("{CAMERA}\n[defs.tree]\ntype = \"sphere\"\n\n[[objects]]\ntype = \"instance\"\nof = \"tre\"\n");
+    check(
+        &text,
+        18,
+        "of",
+        "no definition named 'tre' (did you mean 'tree'?)",
+    );
+    let text = format!("{CAMERA}\n[[objects]]\ntype = \"sphree\"\n");
+    check(
+        &text,
+        14,
+        "objects[0].type",
+        "unknown value `sphree` (did you mean 'sphere'?); the values allowed here: sphere, plane",
+    );
+    let text = format!("{CAMERA}\n[[objects]]\ntype = \"sphere\"\nmaterail = \"x\"\n");
+    check(
+        &text,
+        15,
+        "objects[0].materail",
+        "unknown key `materail` (did you mean 'material'?)",
+    );
+    let text = CAMERA.replace("[camera.view]", "[camera.veiw]");
+    let e = load(&text).expect_err("an unknown camera form");
+    assert!(
+        e.message.starts_with("unknown key `veiw` (did you mean 'view'?); the keys allowed here: view, look_at, povray"),
+        "a camera table is a key like any other: {e}"
+    );
+    let text = CAMERA.replace("e = 1", "ee = 1");
+    check(
+        &text,
+        6,
+        "camera.view",
+        "unknown key `ee` (did you mean 'e'?)",
+    );
+    let text = format!(
+        "{CAMERA}\n[[objects]]\ntype = \"sphere\"\ntransform = [{{ translat = [1, 0, 0] }}]\n"
+    );
+    let e = load(&text).expect_err("an unknown transform operation");
+    assert!(
+        e.message
+            .starts_with("unknown key `translat` (did you mean 'translate'?)"),
+        "a transform operation is a key: {e}"
+    );
+}
+
+#[test]
+fn test27_a_bad_number_says_number() {
+    let text = CAMERA.replace("e = 1", "e = \"one\"");
+    check(&text, 6, "camera.view.e", "expected a number");
+    let e = load(&text).unwrap_err();
+    assert!(
+        !e.message.contains("f64"),
+        "a Rust type name in the message: {e}"
+    );
+    let text = CAMERA.replace("width = 8", "width = -8");
+    let e = load(&text).unwrap_err();
+    assert!(
+        e.message.contains("a whole number") && !e.message.contains("u32"),
+        "a Rust type name in the message: {e}"
+    );
 }

@@ -14,6 +14,7 @@ use crate::camera::{Camera, CameraError, ViewingModel, Window};
 use crate::light::AreaLight;
 use crate::real::{vec3, Real, Vec2};
 use crate::shapes::{Mesh, Triangle};
+use crate::suggest::did_you_mean;
 use crate::transform::{Affine64, Transform};
 use glam::{DMat3, DVec3};
 use std::collections::{BTreeMap, HashMap, HashSet};
@@ -840,7 +841,11 @@ impl Builder<'_> {
                 self.src.error(
                     m.span().start,
                     format!("{path}.material"),
-                    format!("no material named '{}'", m.get_ref()),
+                    format!(
+                        "no material named '{}'{}",
+                        m.get_ref(),
+                        did_you_mean(m.get_ref(), self.materials.keys().map(String::as_str))
+                    ),
                 )
             })?,
             None => parent_material,
@@ -933,7 +938,11 @@ its vertices are too large; scale the object down, or use the f64 build",
                             self.src.error(
                                 f.span().start,
                                 format!("{path}.file"),
-                                format!("{}: {e}", full.display()),
+                                format!(
+                                    "'{}', looked for at {} (relative to the scene file's folder): {e}",
+                                    f.get_ref(),
+                                    full.display()
+                                ),
                             )
                         })?);
                         self.meshes.insert(full, m.clone());
@@ -997,7 +1006,10 @@ its vertices are too large; scale the object down, or use the f64 build",
             return Err(self.src.error(
                 of.span().start,
                 "of",
-                format!("no definition named '{name}'"),
+                format!(
+                    "no definition named '{name}'{}",
+                    did_you_mean(name, defs.keys().map(String::as_str))
+                ),
             ));
         };
         if !self.in_progress.insert(name.clone()) {
@@ -1075,12 +1087,8 @@ impl Scene {
 
     /// Reads and builds a scene file with command-line overrides of its render settings.
     pub fn load_with(path: &Path, overrides: &Overrides) -> Result<Scene, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            file: path.display().to_string(),
-            line: 0,
-            column: 0,
-            field: "(file)".into(),
-            message: format!("cannot read: {e}"),
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            SceneError::unlocated(path, "", format!("cannot read the scene file: {e}"))
         })?;
         let base = path.parent().unwrap_or(Path::new("."));
         build_with(&text, path, base, overrides)

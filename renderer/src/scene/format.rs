@@ -444,6 +444,13 @@ pub fn parse_table(
             .to_string()
             .replace(".$__serde_spanned_private_value", "");
         let inner = e.into_inner();
-        (inner.span(), path, inner.message().to_string())
+        let span = inner.span();
+        // An enum's name written as a value is quoted; as a key (`[camera.lookat]`) it is not.
+        let quoted = span
+            .clone()
+            .and_then(|r| text.get(r))
+            .is_some_and(|t| t.trim_start().starts_with(['"', '\'']));
+        let message = super::error::reword(inner.message(), !quoted);
+        (span, path, message)
     })
 }
