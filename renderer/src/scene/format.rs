@@ -8,6 +8,11 @@ use toml::Spanned;
 /// A 3-vector in the file.
 pub type V3 = Exact<f64, 3>;
 
+/// A vector of the file as a glam vector.
+pub fn dv(v: V3) -> glam::DVec3 {
+    glam::DVec3::from_array(v.0)
+}
+
 /// A TOML array of exactly `N` elements. serde's fixed-size arrays read the first `N`
 /// elements and ignore the rest; this refuses an array of any other length, so
 /// `translate = [1, 0, 0, 99]` is an error, not a translation by (1, 0, 0).

@@ -4,9 +4,17 @@
 //! `crate::material`); the integrators read the scene, and nothing here reads them.
 
 pub mod build;
+mod camera_desc;
+mod definitions;
 pub mod error;
 pub mod format;
+mod lights_desc;
+mod materials_desc;
+mod nodes;
+mod numbers;
+mod origin;
 pub mod settings;
+mod transform_ops;
 
 use crate::aggregate::Aggregate;
 use crate::camera::Camera;
@@ -38,7 +46,7 @@ pub struct Scene {
 
 impl Scene {
     /// The world point at render space's origin: 0, or the eye when the scene was moved
-    /// there for precision (scene/build.rs, `render_origin`). Hit points, lights and the
+    /// there for precision (scene/origin.rs, `render_origin`). Hit points, lights and the
     /// camera are in render space; add this to report world coordinates.
     pub fn origin(&self) -> glam::DVec3 {
         self.camera.origin()

@@ -1,0 +1,320 @@
+//! The object tree flattened into instances: transforms composed in f64, materials and
+//! definitions resolved, meshes loaded once per file, each node validated where it is
+//! written.
+
+use super::error::{SceneError, Source};
+use super::format::dv;
+use super::format::{NodeDesc, NodeKind};
+use super::transform_ops::op_affine;
+use crate::aggregate::{Aggregate, Instance, Shape, INHERIT};
+use crate::real::{vec3, Real, Vec2};
+use crate::shapes::{Mesh, Triangle};
+use crate::transform::{Affine64, Transform};
+use glam::{DMat3, DVec3};
+use std::collections::{BTreeMap, HashMap, HashSet};
+use std::path::PathBuf;
+use std::sync::Arc;
+use toml::Spanned;
+
+pub(super) struct Builder<'a> {
+    pub(super) src: &'a Source<'a>,
+    pub(super) emissive: Vec<bool>,
+    pub(super) base: PathBuf,
+    pub(super) materials: HashMap<String, u32>,
+    pub(super) defs: &'a BTreeMap<String, Spanned<NodeDesc>>,
+    pub(super) built_defs: HashMap<String, Arc<Aggregate>>,
+    pub(super) in_progress: HashSet<String>,
+    pub(super) meshes: HashMap<PathBuf, Arc<Mesh>>,
+    pub(super) objects: Vec<String>,
+    /// The world point at render space's origin.
+    pub(super) origin: DVec3,
+}
+
+impl Builder<'_> {
+    /// The scene's own objects, flattened, in the render space whose origin is the world
+    /// point `origin`: every top-level transform is composed (in `f64`) with a translation
+    /// by `−origin` before it is converted to the render precision.
+    pub(super) fn top_level(
+        &mut self,
+        objects: &[Spanned<NodeDesc>],
+        origin: DVec3,
+    ) -> Result<Vec<Instance>, SceneError> {
+        self.objects.clear();
+        self.origin = origin;
+        let rebase = Affine64::translate(-origin);
+        let mut instances = Vec::new();
+        for (k, node) in objects.iter().enumerate() {
+            self.node(
+                node,
+                &format!("objects[{k}]"),
+                &rebase,
+                0,
+                true,
+                &mut instances,
+            )?;
+        }
+        Ok(instances)
+    }
+
+    /// Flattens `node` into `out`. `numbered`: nodes of the scene's own tree get object ids;
+    /// nodes inside definitions inherit the id of the instance that places them.
+    fn node(
+        &mut self,
+        node: &Spanned<NodeDesc>,
+        path: &str,
+        parent: &Affine64,
+        parent_material: u32,
+        numbered: bool,
+        out: &mut Vec<Instance>,
+    ) -> Result<(), SceneError> {
+        let d = node.get_ref();
+        let span = node.span();
+        let err = |field: &str, msg: &dyn std::fmt::Display| {
+            self.src
+                .key_error(span.clone(), field, format!("{path}.{field}"), msg)
+        };
+        self.check_fields(d, path, span.clone())?;
+
+        // Compose the local transform, validating each operation on its own line.
+        let mut local = Affine64::IDENTITY;
+        for (k, op) in d.transform.iter().enumerate() {
+            let field = format!("{path}.transform[{k}]");
+            let a =
+                op_affine(op.get_ref()).map_err(|m| self.src.error(op.span().start, &field, m))?;
+            a.inverse()
+                .map_err(|e| self.src.error(op.span().start, &field, e))?;
+            local = a.compose(&local);
+        }
+        let mut xf = parent.compose(&local);
+
+        let material = match &d.material {
+            Some(m) => *self.materials.get(m.get_ref()).ok_or_else(|| {
+                self.src.error(
+                    m.span().start,
+                    format!("{path}.material"),
+                    format!("no material named '{}'", m.get_ref()),
+                )
+            })?,
+            None => parent_material,
+        };
+
+        let shape = match d.kind {
+            NodeKind::Group => {
+                for (k, child) in d.children.iter().flatten().enumerate() {
+                    self.node(
+                        child,
+                        &format!("{path}.children[{k}]"),
+                        &xf,
+                        material,
+                        numbered,
+                        out,
+                    )?;
+                }
+                return Ok(());
+            }
+            NodeKind::Sphere => Shape::Sphere,
+            NodeKind::Plane => Shape::Plane,
+            NodeKind::Box => Shape::Cube,
+            NodeKind::Cylinder => Shape::Cylinder {
+                capped: d.capped.unwrap_or(true),
+            },
+            NodeKind::Cone => Shape::Cone {
+                capped: d.capped.unwrap_or(true),
+            },
+            NodeKind::Disk => Shape::Disk,
+            NodeKind::Rectangle => Shape::Rectangle,
+            NodeKind::Triangle => {
+                let v = d
+                    .vertices
+                    .as_ref()
+                    .ok_or_else(|| err("vertices", &"a triangle needs three vertices"))?;
+                // Vertices placed by a pure translation in a rebased scene are world
+                // coordinates: move them into render space in f64, so their precision
+                // is the render space's, not the world's.
+                let shift = if self.origin != DVec3::ZERO && xf.m == DMat3::IDENTITY {
+                    std::mem::replace(&mut xf, Affine64::IDENTITY).d
+                } else {
+                    DVec3::ZERO
+                };
+                let p = v.get_ref().map(|q| vec3(dv(q) + shift));
+                if p.iter().any(|q| !q.is_finite()) {
+                    return Err(self.src.error(
+                        v.span().start,
+                        format!("{path}.vertices"),
+                        "must be finite",
+                    ));
+                }
+                let tri = Triangle {
+                    p,
+                    n: d.normals.as_ref().map(|n| n.get_ref().map(|q| vec3(dv(q)))),
+                    uv: d
+                        .uvs
+                        .map(|u| u.map(|q| Vec2::new(q[0] as Real, q[1] as Real))),
+                };
+                let n = tri.normal();
+                if !(n.is_finite() && n.length_squared().is_finite()) {
+                    return Err(self.src.error(
+                        v.span().start,
+                        format!("{path}.vertices"),
+                        format!(
+                            "the triangle's normal overflows the renderer's precision ({}): \
+its vertices are too large; scale the object down, or use the f64 build",
+                            crate::real::PRECISION
+                        ),
+                    ));
+                }
+                if !(n.length_squared() > 0.0) {
+                    return Err(self.src.error(
+                        v.span().start,
+                        format!("{path}.vertices"),
+                        "the triangle is degenerate (zero area)",
+                    ));
+                }
+                Shape::Triangle(Box::new(tri))
+            }
+            NodeKind::Mesh => {
+                let f = d
+                    .file
+                    .as_ref()
+                    .ok_or_else(|| err("file", &"a mesh needs a file"))?;
+                let full = self.base.join(f.get_ref());
+                let mesh = match self.meshes.get(&full) {
+                    Some(m) => m.clone(),
+                    None => {
+                        let m = Arc::new(Mesh::load_obj(&full).map_err(|e| {
+                            self.src.error(
+                                f.span().start,
+                                format!("{path}.file"),
+                                format!("{}: {e}", full.display()),
+                            )
+                        })?);
+                        self.meshes.insert(full, m.clone());
+                        m
+                    }
+                };
+                Shape::Mesh(mesh)
+            }
+            NodeKind::Instance => {
+                let of =
+                    d.of.as_ref()
+                        .ok_or_else(|| err("of", &"an instance needs `of`, a definition's name"))?;
+                Shape::Group(self.def(of)?)
+            }
+        };
+        let transform = if xf.is_identity() {
+            None
+        } else {
+            Some(
+                Transform::new(&xf)
+                    .map_err(|e| err("transform", &format!("composed with its parents: {e}")))?,
+            )
+        };
+        if material != INHERIT && self.emissive[material as usize] {
+            if !matches!(shape, Shape::Sphere | Shape::Rectangle) {
+                return Err(err(
+                    "material",
+                    &"an emitting material (radiance) can only be on a sphere or a rectangle",
+                ));
+            }
+            if !numbered {
+                return Err(err(
+                    "material",
+                    &"an emitting material cannot be used inside a definition",
+                ));
+            }
+        }
+        let object_id = if numbered {
+            self.objects.push(path.to_string());
+            self.objects.len() as u32
+        } else {
+            0
+        };
+        out.push(Instance {
+            shape,
+            xf: transform,
+            material,
+            object_id,
+        });
+        Ok(())
+    }
+
+    /// Builds (once) the aggregate of a named definition.
+    fn def(&mut self, of: &Spanned<String>) -> Result<Arc<Aggregate>, SceneError> {
+        let name = of.get_ref();
+        if let Some(a) = self.built_defs.get(name) {
+            return Ok(a.clone());
+        }
+        let defs = self.defs;
+        let Some(node) = defs.get(name) else {
+            return Err(self.src.error(
+                of.span().start,
+                "of",
+                format!("no definition named '{name}'"),
+            ));
+        };
+        if !self.in_progress.insert(name.clone()) {
+            return Err(self.src.error(
+                of.span().start,
+                "of",
+                format!("definition '{name}' contains itself"),
+            ));
+        }
+        let mut inner = Vec::new();
+        self.node(
+            node,
+            &format!("defs.{name}"),
+            &Affine64::IDENTITY,
+            INHERIT,
+            false,
+            &mut inner,
+        )?;
+        self.in_progress.remove(name);
+        let agg = Arc::new(Aggregate::new(inner));
+        if agg.surface_count().is_none() {
+            return Err(self.src.error(
+                of.span().start,
+                "of",
+                format!(
+                    "definition '{name}' expands to more than 2^64 - 1 surfaces (its instances \
+                     of other definitions multiply); a scene's surfaces must be countable in 64 bits"
+                ),
+            ));
+        }
+        self.built_defs.insert(name.clone(), agg.clone());
+        Ok(agg)
+    }
+
+    /// Rejects fields that do not belong to the node's kind.
+    fn check_fields(
+        &self,
+        d: &NodeDesc,
+        path: &str,
+        span: std::ops::Range<usize>,
+    ) -> Result<(), SceneError> {
+        let k = d.kind;
+        let wrong = [
+            (
+                "capped",
+                d.capped.is_some() && !matches!(k, NodeKind::Cylinder | NodeKind::Cone),
+            ),
+            ("vertices", d.vertices.is_some() && k != NodeKind::Triangle),
+            ("normals", d.normals.is_some() && k != NodeKind::Triangle),
+            ("uvs", d.uvs.is_some() && k != NodeKind::Triangle),
+            ("file", d.file.is_some() && k != NodeKind::Mesh),
+            ("of", d.of.is_some() && k != NodeKind::Instance),
+            ("children", d.children.is_some() && k != NodeKind::Group),
+        ];
+        for (field, bad) in wrong {
+            if bad {
+                let kind = format!("{k:?}").to_lowercase();
+                return Err(self.src.key_error(
+                    span,
+                    field,
+                    format!("{path}.{field}"),
+                    format!("not a field of a {kind}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
