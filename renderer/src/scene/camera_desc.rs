@@ -3,7 +3,7 @@
 
 use super::error::{SceneError, Source};
 use super::format::dv;
-use super::format::CameraDesc;
+use super::format::{self, CameraDesc};
 use crate::camera::{Camera, CameraError, ViewingModel, Window};
 use toml::Spanned;
 
@@ -13,6 +13,40 @@ pub(super) fn build_camera(
     rows: u32,
     src: &Source,
 ) -> Result<Camera, SceneError> {
+    // Every vector of the form must be finite: refused at its own key (the camera's own
+    // checks name the quantity they derive, such as the view-plane normal, not the key).
+    let (form, vectors): (&str, Vec<(&str, &format::V3)>) = match c.get_ref() {
+        CameraDesc::View { vrp, vpn, vup, .. } => {
+            ("view", vec![("vrp", vrp), ("vpn", vpn), ("vup", vup)])
+        }
+        CameraDesc::LookAt { from, at, up, .. } => {
+            ("look_at", vec![("from", from), ("at", at), ("up", up)])
+        }
+        CameraDesc::Povray {
+            location,
+            direction,
+            right,
+            up,
+        } => (
+            "povray",
+            vec![
+                ("location", location),
+                ("direction", direction),
+                ("right", right),
+                ("up", up),
+            ],
+        ),
+    };
+    for (key, v) in vectors {
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(src.key_error(
+                c.span(),
+                key,
+                format!("camera.{form}.{key}"),
+                "must be finite",
+            ));
+        }
+    }
     let (form, model) = match c.get_ref() {
         CameraDesc::View {
             vrp,

@@ -347,7 +347,7 @@ pub struct NodeDesc {
     /// Triangle: per-vertex shading normals.
     pub normals: Option<Spanned<Exact<V3, 3>>>,
     /// Triangle: per-vertex uv.
-    pub uvs: Option<Exact<Exact<f64, 2>, 3>>,
+    pub uvs: Option<Spanned<Exact<Exact<f64, 2>, 3>>>,
     /// Mesh: OBJ file, relative to the scene file.
     pub file: Option<Spanned<String>>,
     /// Instance: the definition's name.

@@ -144,13 +144,38 @@ impl Builder<'_> {
                         "must be finite",
                     ));
                 }
-                let tri = Triangle {
-                    p,
-                    n: d.normals.as_ref().map(|n| n.get_ref().map(|q| vec3(dv(q)))),
-                    uv: d
-                        .uvs
-                        .map(|u| u.map(|q| Vec2::new(q[0] as Real, q[1] as Real))),
-                };
+                // Normals and uvs are checked as the vertices are, where they are
+                // written (an OBJ file's are refused by the mesh loader).
+                let n = d.normals.as_ref().map(|n| n.get_ref().map(|q| vec3(dv(q))));
+                if let (Some(at), Some(n)) = (&d.normals, &n) {
+                    if n.iter().any(|q| !q.is_finite()) {
+                        return Err(self.src.error(
+                            at.span().start,
+                            format!("{path}.normals"),
+                            format!(
+                                "must be finite in the renderer's precision ({})",
+                                crate::real::PRECISION
+                            ),
+                        ));
+                    }
+                }
+                let uv = d
+                    .uvs
+                    .as_ref()
+                    .map(|u| u.get_ref().map(|q| Vec2::new(q[0] as Real, q[1] as Real)));
+                if let (Some(at), Some(uv)) = (&d.uvs, &uv) {
+                    if uv.iter().any(|q| !q.is_finite()) {
+                        return Err(self.src.error(
+                            at.span().start,
+                            format!("{path}.uvs"),
+                            format!(
+                                "must be finite in the renderer's precision ({})",
+                                crate::real::PRECISION
+                            ),
+                        ));
+                    }
+                }
+                let tri = Triangle { p, n, uv };
                 let n = tri.normal();
                 if !(n.is_finite() && n.length_squared().is_finite()) {
                     return Err(self.src.error(
