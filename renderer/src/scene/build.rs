@@ -13,6 +13,7 @@ use super::materials_desc::color;
 use super::nodes::Builder;
 use super::numbers::check_precision;
 use super::origin::render_origin;
+use super::scale_check;
 use super::{lights_desc, materials_desc};
 use super::{Color, Integrator, Scene, Settings};
 use crate::aggregate::Aggregate;
@@ -219,6 +220,9 @@ it bounds the recursion of the classic model and the length of a path",
         meshes: HashMap::new(),
         objects: Vec::new(),
         origin: DVec3::ZERO,
+        eye: camera.eye64,
+        tau: scale_check::tolerance(camera.pixel_angle()),
+        notes: Vec::new(),
     };
     // Build in world coordinates; then, if the scene lies far from the world origin
     // compared with its own extent, build its objects again in a render space whose
@@ -235,6 +239,7 @@ it bounds the recursion of the classic model and the length of a path",
         l.position = vec3(p - origin);
     }
     let objects = std::mem::take(&mut b.objects);
+    let scale_notes = std::mem::take(&mut b.notes);
     if root.surface_count().is_none() {
         return Err(src.error(
             0,
@@ -263,6 +268,7 @@ it bounds the recursion of the classic model and the length of a path",
         objects,
         area_lights,
         area_light_of,
+        scale_notes,
     })
 }
 

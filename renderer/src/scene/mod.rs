@@ -13,6 +13,7 @@ mod materials_desc;
 mod nodes;
 mod numbers;
 mod origin;
+pub mod scale_check;
 pub mod settings;
 mod transform_ops;
 
@@ -42,6 +43,10 @@ pub struct Scene {
     pub area_lights: Vec<AreaLight>,
     /// For each object id, the index of its area light, or `u32::MAX`.
     pub area_light_of: Vec<u32>,
+    /// The scene's objects whose own size is too large next to the distances the camera
+    /// sees for the build's precision, each moved to mixed precision or warned about
+    /// (`scale_check`, renderer/docs/precision.md).
+    pub scale_notes: Vec<scale_check::ScaleNote>,
 }
 
 impl Scene {

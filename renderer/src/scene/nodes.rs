@@ -5,6 +5,7 @@
 use super::error::{SceneError, Source};
 use super::format::dv;
 use super::format::{NodeDesc, NodeKind};
+use super::scale_check::{self, ScaleNote, BUILD_BITS, MIXED_BITS};
 use super::transform_ops::op_affine;
 use crate::aggregate::{Aggregate, Instance, Shape, INHERIT};
 use crate::real::{vec3, Real, Vec2};
@@ -28,6 +29,12 @@ pub(super) struct Builder<'a> {
     pub(super) objects: Vec<String>,
     /// The world point at render space's origin.
     pub(super) origin: DVec3,
+    /// The eye, in world coordinates, and the relative depth the camera resolves
+    /// ([`scale_check::tolerance`]).
+    pub(super) eye: DVec3,
+    pub(super) tau: f64,
+    /// Instances of the scene's own tree that the build's precision cannot resolve.
+    pub(super) notes: Vec<ScaleNote>,
 }
 
 impl Builder<'_> {
@@ -40,6 +47,7 @@ impl Builder<'_> {
         origin: DVec3,
     ) -> Result<Vec<Instance>, SceneError> {
         self.objects.clear();
+        self.notes.clear();
         self.origin = origin;
         let rebase = Affine64::translate(-origin);
         let mut instances = Vec::new();
@@ -98,7 +106,7 @@ impl Builder<'_> {
             None => parent_material,
         };
 
-        let shape = match d.kind {
+        let mut shape = match d.kind {
             NodeKind::Group => {
                 for (k, child) in d.children.iter().flatten().enumerate() {
                     self.node(
@@ -226,6 +234,9 @@ its vertices are too large; scale the object down, or use the f64 build",
                 Shape::Group(self.def(of)?)
             }
         };
+        if numbered {
+            self.check_scale(&mut shape, &mut xf, material, span.start, path);
+        }
         let transform = if xf.is_identity() {
             None
         } else {
@@ -261,6 +272,47 @@ its vertices are too large; scale the object down, or use the f64 build",
             object_id,
         });
         Ok(())
+    }
+
+    /// The scale check of renderer/docs/precision.md ("Scale against view") for an
+    /// instance of the scene's own tree: when the build's precision cannot resolve it, a
+    /// note, and the instance moved to mixed precision where its shape allows (not an
+    /// emitter: area lights sample the canonical shape).
+    fn check_scale(
+        &mut self,
+        shape: &mut Shape,
+        xf: &mut Affine64,
+        material: u32,
+        at: usize,
+        path: &str,
+    ) {
+        let eye = self.eye - self.origin;
+        let Some(need) = scale_check::need(shape, xf, eye, self.tau) else {
+            return;
+        };
+        if need.bits <= BUILD_BITS {
+            return;
+        }
+        let emits = material != INHERIT && self.emissive[material as usize];
+        let mixed = match (need.bits <= MIXED_BITS && !emits)
+            .then(|| scale_check::anchored(shape, xf, need.anchor))
+        {
+            Some(Some((s, x))) => {
+                (*shape, *xf) = (s, x);
+                true
+            }
+            _ => false,
+        };
+        let (line, column) = self.src.line_col(at);
+        self.notes.push(ScaleNote {
+            file: self.src.file.clone(),
+            line,
+            column,
+            field: path.to_string(),
+            bits: need.bits,
+            ratio: need.ratio,
+            mixed,
+        });
     }
 
     /// Builds (once) the aggregate of a named definition.
