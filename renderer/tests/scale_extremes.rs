@@ -297,3 +297,50 @@ fn test06_quiet_on_the_catalog_and_the_examples() {
         flagged.join("\n")
     );
 }
+
+#[test]
+fn test07_render_names_the_object_and_the_way_out() {
+    // `renderer render` prints the note (or, with mixed precision off, the warning) at
+    // the object's line in the scene file, with its field and what resolves it.
+    let planet = format!("{DIR}/scale_planet_sphere.toml");
+    let text = std::fs::read_to_string(&planet).unwrap();
+    let line = 1 + text.lines().position(|l| l == "[[objects]]").unwrap();
+    let dir = std::env::temp_dir().join(format!("scale_extremes_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let off = dir.join("planet_off.toml");
+    std::fs::write(
+        &off,
+        text.replace("[render]\n", "[render]\nmixed_precision = false\n"),
+    )
+    .unwrap();
+    for (scene, line, want) in [
+        (
+            planet.clone(),
+            line,
+            ["note:", "mixed precision", "objects[0]"],
+        ),
+        (
+            off.display().to_string(),
+            line + 1,
+            ["warning:", "render.mixed_precision = true", "objects[0]"],
+        ),
+    ] {
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_renderer"))
+            .args(["render", &scene, "-o"])
+            .arg(dir.join("out.png"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(run.status.success(), "{scene}: {err}");
+        let at = format!("{scene}:{line}:");
+        if renderer::real::PRECISION == "f64" {
+            assert!(!err.contains(&at), "the f64 build needs no note: {err}");
+            continue;
+        }
+        assert!(
+            err.contains(&at) && want.iter().all(|w| err.contains(w)),
+            "{scene}: stderr should name {at} with {want:?} (renderer/src/scene/scale_check.rs):\n{err}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -223,6 +223,7 @@ it bounds the recursion of the classic model and the length of a path",
         eye: camera.eye64,
         tau: scale_check::tolerance(camera.pixel_angle()),
         notes: Vec::new(),
+        mixed: desc.render.get_ref().mixed_precision,
     };
     // Build in world coordinates; then, if the scene lies far from the world origin
     // compared with its own extent, build its objects again in a render space whose

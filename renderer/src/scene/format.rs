@@ -192,6 +192,10 @@ pub struct RenderDesc {
     /// (0, the default, traces none).
     #[serde(default)]
     pub light_paths: f64,
+    /// Intersect in mixed precision the instances the build's precision cannot resolve
+    /// (on unless turned off; renderer/docs/precision.md, "Scale against view").
+    #[serde(default = "yes")]
+    pub mixed_precision: bool,
 }
 
 fn yes() -> bool {

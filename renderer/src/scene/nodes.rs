@@ -8,7 +8,7 @@ use super::format::{NodeDesc, NodeKind};
 use super::scale_check::{self, ScaleNote, BUILD_BITS, MIXED_BITS};
 use super::transform_ops::op_affine;
 use crate::aggregate::{Aggregate, Instance, Shape, INHERIT};
-use crate::real::{vec3, Real, Vec2};
+use crate::real::{dvec3, vec3, Real, Vec2};
 use crate::shapes::{Mesh, Triangle};
 use crate::transform::{Affine64, Transform};
 use glam::{DMat3, DVec3};
@@ -35,6 +35,8 @@ pub(super) struct Builder<'a> {
     pub(super) tau: f64,
     /// Instances of the scene's own tree that the build's precision cannot resolve.
     pub(super) notes: Vec<ScaleNote>,
+    /// Whether such instances go to mixed precision (`render.mixed_precision`).
+    pub(super) mixed: bool,
 }
 
 impl Builder<'_> {
@@ -234,17 +236,25 @@ its vertices are too large; scale the object down, or use the f64 build",
                 Shape::Group(self.def(of)?)
             }
         };
-        if numbered {
-            self.check_scale(&mut shape, &mut xf, material, span.start, path);
-        }
-        let transform = if xf.is_identity() {
+        let placed = |xf: &Affine64| {
+            Transform::new(xf)
+                .map_err(|e| err("transform", &format!("composed with its parents: {e}")))
+        };
+        let mut transform = if xf.is_identity() {
             None
         } else {
-            Some(
-                Transform::new(&xf)
-                    .map_err(|e| err("transform", &format!("composed with its parents: {e}")))?,
-            )
+            Some(placed(&xf)?)
         };
+        if numbered {
+            let inv = transform.map_or(DMat3::IDENTITY, |t| {
+                let m = t.inverse_matrix();
+                DMat3::from_cols(dvec3(m.x_axis), dvec3(m.y_axis), dvec3(m.z_axis))
+            });
+            if let Some(moved) = self.check_scale(&mut shape, &xf, &inv, material, span.start, path)
+            {
+                transform = Some(placed(&moved)?);
+            }
+        }
         if material != INHERIT && self.emissive[material as usize] {
             if !matches!(shape, Shape::Sphere | Shape::Rectangle) {
                 return Err(err(
@@ -278,31 +288,31 @@ its vertices are too large; scale the object down, or use the f64 build",
     /// instance of the scene's own tree: when the build's precision cannot resolve it, a
     /// note, and the instance moved to mixed precision where its shape allows (not an
     /// emitter: area lights sample the canonical shape).
+    /// Returns the instance's new transform when it moved. `inv`: the linear part of the
+    /// transform's inverse as stored (the build's precision is enough for an estimate).
     fn check_scale(
         &mut self,
         shape: &mut Shape,
-        xf: &mut Affine64,
+        xf: &Affine64,
+        inv: &DMat3,
         material: u32,
         at: usize,
         path: &str,
-    ) {
+    ) -> Option<Affine64> {
         let eye = self.eye - self.origin;
-        let Some(need) = scale_check::need(shape, xf, eye, self.tau) else {
-            return;
-        };
+        let need = scale_check::need(shape, xf, inv, eye, self.tau);
         if need.bits <= BUILD_BITS {
-            return;
+            return None;
         }
         let emits = material != INHERIT && self.emissive[material as usize];
-        let mixed = match (need.bits <= MIXED_BITS && !emits)
+        let moved = (self.mixed && need.bits <= MIXED_BITS && !emits)
             .then(|| scale_check::anchored(shape, xf, need.anchor))
-        {
-            Some(Some((s, x))) => {
-                (*shape, *xf) = (s, x);
-                true
-            }
-            _ => false,
-        };
+            .flatten()
+            .map(|(s, x)| {
+                *shape = s;
+                x
+            });
+        let mixed = moved.is_some();
         let (line, column) = self.src.line_col(at);
         self.notes.push(ScaleNote {
             file: self.src.file.clone(),
@@ -312,7 +322,9 @@ its vertices are too large; scale the object down, or use the f64 build",
             bits: need.bits,
             ratio: need.ratio,
             mixed,
+            mixed_off: !self.mixed,
         });
+        moved
     }
 
     /// Builds (once) the aggregate of a named definition.

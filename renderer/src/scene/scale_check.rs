@@ -17,7 +17,7 @@ use crate::real::Real;
 use crate::shapes::anchored::{Anchored, Kind};
 use crate::shapes::Mesh;
 use crate::transform::Affine64;
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use std::sync::Arc;
 
 /// Bits of significand of the build's precision: 24 in f32, 53 in f64.
@@ -49,6 +49,8 @@ pub struct ScaleNote {
     pub ratio: f64,
     /// Whether it is intersected in mixed precision (else the build cannot resolve it).
     pub mixed: bool,
+    /// Whether mixed precision was turned off (`render.mixed_precision = false`).
+    pub mixed_off: bool,
 }
 
 impl std::fmt::Display for ScaleNote {
@@ -71,18 +73,25 @@ bits of precision, more than the {BUILD_BITS} of the {p} build",
 which resolves it (renderer/docs/precision.md, \"Scale against view\")"
             )
         } else {
-            let fix = if self.bits <= MIXED_BITS {
+            let fix = if self.bits <= MIXED_BITS && self.mixed_off {
+                "render.mixed_precision = true (the default) or the f64 build (--features f64) would resolve it"
+            } else if self.bits <= MIXED_BITS {
                 "the f64 build (--features f64) would resolve it"
             } else {
                 "not even the f64 build would: bring the camera farther from it, or model the part \
 the camera sees at a smaller scale"
             };
+            let not_mixed = if self.mixed_off {
+                "render.mixed_precision is off"
+            } else {
+                "mixed precision cannot take it (a cone, a definition or an emitter, or more than \
+53 bits)"
+            };
             write!(
                 f,
-                "warning: {why}, and mixed precision cannot take it (a cone, a definition or an \
-emitter, or more than {MIXED_BITS} bits); depths on it may be off by about {:.0e} of their \
+                "warning: {why}, and {not_mixed}; depths on it may be off by about {:.0e} of their \
 distance; {fix} (renderer/docs/precision.md, \"Scale against view\")",
-                4.0 * self.ratio * 2f64.powi(-(BUILD_BITS as i32))
+                self.ratio * 2f64.powi(-(BUILD_BITS as i32))
             )
         }
     }
@@ -100,11 +109,11 @@ pub struct Need {
 }
 
 /// The estimate for `shape` placed by `xf` (render space), seen from `eye` (render space)
-/// with a relative depth tolerance `tau`. `None` for a transform that has no inverse
-/// (refused elsewhere).
-pub fn need(shape: &Shape, xf: &Affine64, eye: DVec3, tau: f64) -> Option<Need> {
-    let inv = xf.inverse().ok()?;
-    let o = inv.point(eye);
+/// with a relative depth tolerance `tau`. `inv` is the linear part of `xf`'s inverse, as
+/// the instance stores it (in the build's precision, which is enough for an estimate and
+/// costs the build no second inversion).
+pub fn need(shape: &Shape, xf: &Affine64, inv: &DMat3, eye: DVec3, tau: f64) -> Need {
+    let o = *inv * (eye - xf.d);
     let s = [
         xf.m.x_axis.length(),
         xf.m.y_axis.length(),
@@ -163,11 +172,11 @@ pub fn need(shape: &Shape, xf: &Affine64, eye: DVec3, tau: f64) -> Option<Need> 
         }
     };
     let ratio = ratio.max(1.0);
-    Some(Need {
+    Need {
         bits: (4.0 * ratio / tau).log2(),
         ratio,
         anchor,
-    })
+    }
 }
 
 fn s_min(s: &[f64; 3]) -> f64 {
