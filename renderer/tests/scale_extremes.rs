@@ -344,3 +344,55 @@ fn test07_render_names_the_object_and_the_way_out() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn test08_where_the_estimate_is_quiet_the_build_holds() {
+    // The planet at radii 10 to 1e6 (the eye 2 above it), in the build's own precision
+    // (mixed precision off) and with it on: where the scale check is quiet, the build's
+    // precision alone must hold the depth to 1e-5 on every pixel; with mixed precision
+    // on, every radius must.
+    let text = std::fs::read_to_string(format!("{DIR}/scale_planet_sphere.toml")).unwrap();
+    let huge = "[{ scale = 1e6 }, { translate = [0, -1e6, 0] }]";
+    assert!(text.contains(huge), "the planet's transform moved");
+    for r in [1e1, 1e2, 3e2, 1e3, 3e3, 1e4, 1e5, 1e6] {
+        for mixed in [false, true] {
+            let t = text
+                .replace(
+                    huge,
+                    &format!("[{{ scale = {r:?} }}, {{ translate = [0, {:?}, 0] }}]", -r),
+                )
+                .replace(
+                    "[render]\n",
+                    &format!("[render]\nmixed_precision = {mixed}\n"),
+                );
+            let scene = Scene::from_str(&t, Path::new("planet.toml"), Path::new(DIR)).unwrap();
+            let flagged = scene.scale_notes.first().map(|n| n.bits);
+            let mut worst: f64 = 0.0;
+            for j in 0..scene.settings.height {
+                for i in 0..scene.settings.width {
+                    let ray = scene.camera.pixel_ray(i, j);
+                    let (o, d) = (dvec3(ray.o) + scene.origin(), dvec3(ray.d));
+                    let got = scene
+                        .root
+                        .intersect(&ray, 0.0, renderer::real::Real::INFINITY);
+                    if let (Some(g), Some(t)) = (got, sphere_t(o, d, DVec3::new(0.0, -r, 0.0), r)) {
+                        if g.object_id == 1 {
+                            worst = worst.max(((g.t as f64) - t).abs() / t);
+                        }
+                    }
+                }
+            }
+            println!("radius {r:e}, mixed {mixed}: flagged {flagged:?}, worst relative depth {worst:.1e}");
+            assert!(
+                worst <= DEPTH || (flagged.is_some() && !mixed),
+                "radius {r:e}, mixed precision {mixed}: the ground's depth is off by {worst:.1e} \
+(beyond {DEPTH}) though {} (renderer/src/scene/scale_check.rs's estimate, or shapes/anchored.rs)",
+                if mixed {
+                    "mixed precision is on"
+                } else {
+                    "the scale check was quiet"
+                }
+            );
+        }
+    }
+}
