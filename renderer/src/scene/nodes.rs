@@ -301,7 +301,8 @@ its vertices are too large; scale the object down, or use the f64 build",
     ) -> Option<Affine64> {
         let eye = self.eye - self.origin;
         let need = scale_check::need(shape, xf, inv, eye, self.tau);
-        if need.bits <= BUILD_BITS {
+        // (A NaN estimate, which a finite transform should never give, counts as fine.)
+        if !(need.bits > BUILD_BITS) {
             return None;
         }
         let emits = material != INHERIT && self.emissive[material as usize];
