@@ -396,3 +396,97 @@ fn test08_where_the_estimate_is_quiet_the_build_holds() {
         }
     }
 }
+
+#[test]
+fn test09_an_anchored_shape_is_the_shape_moved() {
+    // The same rays (exactly: coordinates on a 1/1024 grid, anchors of few bits) against
+    // the canonical shape and against it anchored: the same hit or miss, the same t to a
+    // few of the build's ulps, the same normal, and the same point once the anchor is
+    // added back; from outside and from inside (exit faces).
+    use renderer::aggregate::Shape;
+    use renderer::ray::Ray;
+    use renderer::real::{vec3, Real};
+    use renderer::shapes::anchored::{Anchored, Kind};
+    let mut seed = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = move |k: i64| {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed % (2 * k as u64 + 1)) as i64 - k
+    };
+    let cases = [
+        (Kind::Sphere, Shape::Sphere, DVec3::new(0.0, 1.0, 0.0)),
+        (Kind::Sphere, Shape::Sphere, DVec3::new(-1.0, 0.0, 0.0)),
+        (Kind::Cube, Shape::Cube, DVec3::new(1.0, 0.5, -0.25)),
+        (Kind::Cube, Shape::Cube, DVec3::new(0.25, -1.0, 0.75)),
+        (
+            Kind::Cylinder { capped: true },
+            Shape::Cylinder { capped: true },
+            DVec3::new(1.0, 0.5, 0.0),
+        ),
+        (
+            Kind::Cylinder { capped: true },
+            Shape::Cylinder { capped: true },
+            DVec3::new(0.5, 1.0, 0.25),
+        ),
+        (
+            Kind::Cylinder { capped: false },
+            Shape::Cylinder { capped: false },
+            DVec3::new(0.0, -0.25, -1.0),
+        ),
+    ];
+    let eps = Real::EPSILON as f64;
+    let mut wrong = Vec::new();
+    for (kind, canonical, a) in cases {
+        let anchored = Shape::Anchored(Box::new(Anchored { kind, a }));
+        let (mut hits, mut inside) = (0, 0);
+        for _ in 0..20_000 {
+            let oa = DVec3::new(next(3072) as f64, next(3072) as f64, next(3072) as f64) / 1024.0;
+            // Aimed at a point of the shape's box (most rays hit), on the same grid.
+            let aim = DVec3::new(next(1024) as f64, next(1024) as f64, next(1024) as f64) / 1024.0;
+            let d = aim - (oa + a);
+            if d == DVec3::ZERO {
+                continue;
+            }
+            let near = Ray::new(vec3(oa), vec3(d));
+            let far = Ray::new(vec3(oa + a), vec3(d));
+            let (got, want) = (
+                anchored.intersect(&near, 0.0, Real::INFINITY),
+                canonical.intersect(&far, 0.0, Real::INFINITY),
+            );
+            match (got, want) {
+                (None, None) => {}
+                (Some(g), Some(w)) => {
+                    hits += 1;
+                    let (gt, wt) = (g.t as f64, w.t as f64);
+                    let (gn, wn) = (dvec3(g.n_geo).normalize(), dvec3(w.n_geo).normalize());
+                    let (gp, wp) = (dvec3(g.p) + a, dvec3(w.p));
+                    inside += (wn.dot(d) > 0.0) as u32;
+                    if (gt - wt).abs() > 16.0 * eps * wt
+                        || gn.dot(wn) < 1.0 - 1e-6
+                        || (gp - wp).length() > 16.0 * eps * (1.0 + wp.length())
+                    {
+                        wrong.push(format!(
+                            "{kind:?} about {a}: ray {oa} + t·{d}: t {gt} n {gn} p {gp}, canonical t {wt} n {wn} p {wp}"
+                        ));
+                    }
+                }
+                (g, w) => wrong.push(format!(
+                    "{kind:?} about {a}: ray {oa} + t·{d}: anchored {:?}, canonical {:?}",
+                    g.map(|h| h.t),
+                    w.map(|h| h.t)
+                )),
+            }
+        }
+        assert!(
+            hits > 2000 && inside > 200,
+            "{kind:?}: too few hits ({hits}) or exits ({inside}) to test"
+        );
+    }
+    assert!(
+        wrong.is_empty(),
+        "{} rays differ between the anchored shapes (renderer/src/shapes/anchored.rs) and the canonical ones:\n{}",
+        wrong.len(),
+        wrong.iter().take(12).cloned().collect::<Vec<_>>().join("\n")
+    );
+}
