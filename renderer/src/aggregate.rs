@@ -109,6 +109,7 @@ impl Shape {
     fn candidate(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         match self {
             Shape::Sphere => shapes::sphere::intersect_bare(ray, t_min, t_max),
+            Shape::Anchored(a) => a.intersect_bare(ray, t_min, t_max),
             _ => self.intersect(ray, t_min, t_max),
         }
     }
@@ -135,8 +136,10 @@ impl Shape {
     /// integrators, which never read it; see [`Aggregate::intersect_for_shading`]).
     #[inline]
     fn complete<const UV: bool>(&self, mut h: Hit) -> Hit {
-        if let (true, Shape::Sphere) = (UV, self) {
-            h.uv = shapes::sphere::uv(h.p);
+        match (UV, self) {
+            (true, Shape::Sphere) => h.uv = shapes::sphere::uv(h.p),
+            (true, Shape::Anchored(a)) => h.uv = a.uv(&h),
+            _ => {}
         }
         h
     }
@@ -152,6 +155,7 @@ impl Shape {
             Shape::Cube => shapes::cube::hits(ray, t_min, t_max),
             Shape::Mesh(m) => m.occluded(ray, t_min, t_max),
             Shape::Group(g) => g.occluded(ray, t_min, t_max),
+            Shape::Anchored(a) => a.intersect_bare(ray, t_min, t_max).is_some(),
             _ => self.intersect(ray, t_min, t_max).is_some(),
         }
     }

@@ -87,6 +87,16 @@ impl Anchored {
     /// Closest hit with `t_min < t < t_max`; the point relative to the anchor.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+        let mut h = self.intersect_bare(ray, t_min, t_max)?;
+        h.uv = self.uv(&h);
+        Some(h)
+    }
+
+    /// [`Anchored::intersect`] without a sphere's uv (left at 0), as the search for a
+    /// closest hit and shadow rays ask for it ([`super::sphere::intersect_bare`]);
+    /// [`Anchored::uv`] completes the winner's record to the same bits.
+    #[inline]
+    pub fn intersect_bare(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         match self.kind {
             Kind::Sphere => self.sphere(ray, t_min, t_max),
             Kind::Cube => self.cube(ray, t_min, t_max),
@@ -115,9 +125,17 @@ impl Anchored {
         let n = (l + d * (side * disc.sqrt() / a)).normalize();
         let p = n - self.a;
         let nr = vec3(n);
-        let mut h = local_hit(t, vec3(p), rounded_err(p), nr, Vec2::ZERO);
-        h.uv = super::sphere::uv(nr);
-        Some(h)
+        Some(local_hit(t, vec3(p), rounded_err(p), nr, Vec2::ZERO))
+    }
+
+    /// The uv of a hit of [`Anchored::intersect_bare`]: a sphere's from its normal (the
+    /// point on the unit sphere about its centre); the others' are already in the record.
+    #[inline]
+    pub fn uv(&self, h: &Hit) -> Vec2 {
+        match self.kind {
+            Kind::Sphere => super::sphere::uv(h.n_geo),
+            _ => h.uv,
+        }
     }
 
     /// The cube's slab test (renderer/src/shapes/cube.rs) with the faces at ±1 − a in f64.
