@@ -17,6 +17,7 @@ use crate::bvh::{Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
 pub use crate::hit::{Hit, INHERIT};
 use crate::ray::Ray;
 use crate::real::{Mat3, Real, Vec3};
+use crate::shapes::anchored::{self, Anchored};
 use crate::shapes::{self, Mesh, Triangle};
 use crate::transform::{map_normal, map_point_with_error, Transform};
 use std::sync::Arc;
@@ -50,6 +51,10 @@ pub enum Shape {
     Mesh(Arc<Mesh>),
     /// A named definition (a sub-scene with its own BVH), shared by every instance.
     Group(Arc<Aggregate>),
+    /// A sphere, cube or cylinder seen from an anchor on its surface, in mixed precision:
+    /// for an instance whose scale is huge next to the distances the camera sees
+    /// (`shapes::anchored`; the scene builder decides, renderer/docs/precision.md).
+    Anchored(Box<Anchored>),
 }
 
 impl Shape {
@@ -72,6 +77,10 @@ impl Shape {
             Shape::Triangle(t) => t.bounds(),
             Shape::Mesh(m) => m.bounds(),
             Shape::Group(g) => g.bounds(),
+            Shape::Anchored(a) => {
+                let (min, max) = a.bounds();
+                Aabb { min, max }
+            }
         }
     }
 
@@ -89,6 +98,7 @@ impl Shape {
             Shape::Triangle(t) => t.intersect(ray, t_min, t_max),
             Shape::Mesh(m) => m.intersect(ray, t_min, t_max),
             Shape::Group(g) => g.intersect(ray, t_min, t_max),
+            Shape::Anchored(a) => a.intersect(ray, t_min, t_max),
         }
     }
 
@@ -99,6 +109,7 @@ impl Shape {
     fn candidate(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
         match self {
             Shape::Sphere => shapes::sphere::intersect_bare(ray, t_min, t_max),
+            Shape::Anchored(a) => a.intersect_bare(ray, t_min, t_max),
             _ => self.intersect(ray, t_min, t_max),
         }
     }
@@ -125,8 +136,10 @@ impl Shape {
     /// integrators, which never read it; see [`Aggregate::intersect_for_shading`]).
     #[inline]
     fn complete<const UV: bool>(&self, mut h: Hit) -> Hit {
-        if let (true, Shape::Sphere) = (UV, self) {
-            h.uv = shapes::sphere::uv(h.p);
+        match (UV, self) {
+            (true, Shape::Sphere) => h.uv = shapes::sphere::uv(h.p),
+            (true, Shape::Anchored(a)) => h.uv = a.uv(&h),
+            _ => {}
         }
         h
     }
@@ -142,6 +155,7 @@ impl Shape {
             Shape::Cube => shapes::cube::hits(ray, t_min, t_max),
             Shape::Mesh(m) => m.occluded(ray, t_min, t_max),
             Shape::Group(g) => g.occluded(ray, t_min, t_max),
+            Shape::Anchored(a) => a.intersect_bare(ray, t_min, t_max).is_some(),
             _ => self.intersect(ray, t_min, t_max).is_some(),
         }
     }
@@ -158,13 +172,21 @@ impl Shape {
     /// Whether the shape is a closed convex solid (a spawned ray leaving it outward can
     /// never hit it again).
     pub fn is_convex_solid(&self) -> bool {
-        matches!(
-            self,
-            Shape::Sphere
-                | Shape::Cube
-                | Shape::Cylinder { capped: true }
-                | Shape::Cone { capped: true }
-        )
+        match self {
+            Shape::Anchored(a) => matches!(
+                a.kind,
+                anchored::Kind::Sphere
+                    | anchored::Kind::Cube
+                    | anchored::Kind::Cylinder { capped: true }
+            ),
+            _ => matches!(
+                self,
+                Shape::Sphere
+                    | Shape::Cube
+                    | Shape::Cylinder { capped: true }
+                    | Shape::Cone { capped: true }
+            ),
+        }
     }
 }
 
@@ -182,6 +204,27 @@ pub struct Instance {
 }
 
 impl Instance {
+    /// The instance as the scene placed it: an anchored shape (mixed precision) as its
+    /// canonical shape, its transform composed with the anchor's shift back. For the
+    /// exporters, which write the scene's own shapes; every other instance as it is.
+    pub fn unanchored(&self) -> std::borrow::Cow<'_, Instance> {
+        let Shape::Anchored(a) = &self.shape else {
+            return std::borrow::Cow::Borrowed(self);
+        };
+        let shape = match a.kind {
+            anchored::Kind::Sphere => Shape::Sphere,
+            anchored::Kind::Cube => Shape::Cube,
+            anchored::Kind::Cylinder { capped } => Shape::Cylinder { capped },
+        };
+        let xf = self.xf.map(|x| x.shifted(-a.a));
+        std::borrow::Cow::Owned(Instance {
+            shape,
+            xf,
+            material: self.material,
+            object_id: self.object_id,
+        })
+    }
+
     /// Bounds in the outer space.
     pub fn bounds(&self) -> Aabb {
         let b = self.shape.bounds();

@@ -313,6 +313,16 @@ impl Camera {
         self.model.rows
     }
 
+    /// The angle one pixel subtends at the eye at the window's centre (radians): the
+    /// finer of its width and its height over E.
+    pub fn pixel_angle(&self) -> f64 {
+        let (m, w) = (&self.model, &self.model.window);
+        let px = ((w.right - w.left) / m.cols.max(1) as f64)
+            .abs()
+            .min(((w.top - w.bottom) / m.rows.max(1) as f64).abs());
+        px / m.e
+    }
+
     /// The eye, in render space (world coordinates minus [`Camera::origin`]).
     pub fn eye(&self) -> Vec3 {
         self.eye

@@ -164,6 +164,9 @@ fn run() -> Result<()> {
             };
             overrides.check().map_err(anyhow::Error::msg)?;
             let s = Scene::load_with(&scene, &overrides)?;
+            for note in &s.scale_notes {
+                eprintln!("{note}");
+            }
             let t0 = std::time::Instant::now();
             let opts = Options {
                 aov,

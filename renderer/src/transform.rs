@@ -215,6 +215,28 @@ or use the f64 build",
         Ok(t)
     }
 
+    /// The same map with its object space moved so that its origin is the object point
+    /// `a`: `m·p + (d + m·a)`, the translation computed in f64 (for anchored shapes).
+    pub fn shifted(&self, a: glam::DVec3) -> Transform {
+        let m64 = glam::DMat3::from_cols(
+            crate::real::dvec3(self.m.x_axis),
+            crate::real::dvec3(self.m.y_axis),
+            crate::real::dvec3(self.m.z_axis),
+        );
+        let inv64 = glam::DMat3::from_cols(
+            crate::real::dvec3(self.inv.x_axis),
+            crate::real::dvec3(self.inv.y_axis),
+            crate::real::dvec3(self.inv.z_axis),
+        );
+        let d = crate::real::dvec3(self.d) + m64 * a;
+        Transform {
+            m: self.m,
+            d: crate::real::vec3(d),
+            inv: self.inv,
+            inv_d: crate::real::vec3(-(inv64 * d)),
+        }
+    }
+
     /// Linear part, `world_from_object` (column-vector convention).
     pub fn matrix(&self) -> Mat3 {
         self.m

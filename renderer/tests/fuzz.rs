@@ -25,6 +25,7 @@ fn corpus() -> Vec<(PathBuf, String)> {
         "renderer/scenes",
         "conformance/scenes/povray",
         "conformance/scenes/mitsuba",
+        "conformance/scenes/scale",
     ] {
         let d = Path::new(ROOT).join(dir);
         let mut files: Vec<PathBuf> = std::fs::read_dir(&d)

@@ -139,7 +139,7 @@ fn candidates(s: &Shape, o: DVec3, d: DVec3) -> Vec<(f64, u32)> {
                 }
             }
         }
-        Shape::Group(_) => unreachable!(),
+        Shape::Group(_) | Shape::Anchored(_) => unreachable!(),
     }
     out.retain(|&(t, _)| t > 0.0 && t.is_finite());
     out
@@ -202,7 +202,7 @@ fn reference(s: &Shape, o: DVec3, d: DVec3) -> Option<Ref> {
             (n, DVec2::new(b1, b2), false)
         }
         (Shape::Mesh(_), _) => (DVec3::Y, flat_uv, false),
-        (Shape::Group(_), _) => unreachable!(),
+        (Shape::Group(_) | Shape::Anchored(_), _) => unreachable!(),
     };
     Some(Ref {
         t,

@@ -482,4 +482,65 @@ fn test27_a_bad_number_says_number() {
         e.message.contains("a whole number") && !e.message.contains("u32"),
         "a Rust type name in the message: {e}"
     );
+#[test]
+fn test28_no_array_field_lets_a_non_finite_number_through() {
+    // Every array field of the format, each with `X` where a number goes: with `nan`,
+    // `inf` or `-inf` there, the scene is refused with the line of the array and its
+    // field. (Triangle normals and uvs were accepted and rendered until issue 37.)
+    const VIEW: &str = "[camera.view]\nvrp = [0, 0, 0]\nvpn = [0, 0, 1]\nvup = [0, 1, 0]\ne = 1\nwindow = { left = -1, right = 1, bottom = -1, top = 1 }\n";
+    const RENDER: &str = "[render]\nwidth = 8\nheight = 8\n";
+    let look_at = "[camera.look_at]\nfrom = [0, 0, -5]\nat = [0, 0, 0]\nup = [0, 1, 0]\nfov = 40\n";
+    let povray = "[camera.povray]\nlocation = [0, 0, -5]\ndirection = [0, 0, 1]\nright = [1.33, 0, 0]\nup = [0, 1, 0]\n";
+    let view = |field: &str| {
+        let (key, _) = field.split_once(" = ").unwrap();
+        let line = VIEW.lines().find(|l| l.starts_with(key)).unwrap();
+        format!("{}{RENDER}", VIEW.replace(line, field))
+    };
+    let with = |camera: &str, field: &str| {
+        let (key, _) = field.split_once(" = ").unwrap();
+        let line = camera.lines().find(|l| l.starts_with(key)).unwrap();
+        format!("{}{RENDER}", camera.replace(line, field))
+    };
+    let scene = |rest: &str| format!("{VIEW}{RENDER}{rest}\n");
+    let tri = "[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 1], [1, 0, 1], [0, 1, 1]]\n";
+    let cases: Vec<(String, &str)> = vec![
+        (view("vrp = [0, X, 0]"), "camera.view"),
+        (view("vpn = [0, 0, X]"), "camera.view"),
+        (view("vup = [X, 1, 0]"), "camera.view"),
+        (with(look_at, "from = [0, X, -5]"), "camera.look_at"),
+        (with(look_at, "at = [X, 0, 0]"), "camera.look_at"),
+        (with(look_at, "up = [0, X, 0]"), "camera.look_at"),
+        (with(povray, "location = [0, 0, X]"), "camera.povray"),
+        (with(povray, "direction = [0, X, 1]"), "camera.povray"),
+        (with(povray, "right = [X, 0, 0]"), "camera.povray"),
+        (with(povray, "up = [0, X, 0]"), "camera.povray"),
+        (scene("background = [0, X, 0]"), "render.background"),
+        (scene("ambient_light = [X, 1, 1]"), "render.ambient_light"),
+        (scene("[[lights]]\nposition = [0, X, 0]"), "lights[0].position"),
+        (scene("[[lights]]\ntype = \"directional\"\ndirection = [0, X, 0]"), "lights[0]"),
+        (scene("[[lights]]\nposition = [0, 1, 0]\ncolor = [1, X, 1]"), "lights[0].color"),
+        (scene("[materials.m]\ncolor = [1, 1, X]"), "materials.m.color"),
+        (scene("[materials.m]\nradiance = [X, 1, 1]"), "materials.m"),
+        (scene("[[objects]]\ntype = \"sphere\"\ntransform = [{ translate = [0, X, 0] }]"), "objects[0].transform[0]"),
+        (scene("[[objects]]\ntype = \"sphere\"\ntransform = [{ rotate = { axis = [0, X, 0], degrees = 30 } }]"), "objects[0].transform[0]"),
+        (scene("[[objects]]\ntype = \"sphere\"\ntransform = [{ scale = [1, X, 1] }]"), "objects[0].transform[0]"),
+        (scene("[[objects]]\ntype = \"sphere\"\ntransform = [{ matrix = [[1, 0, 0], [0, 1, 0], [0, 0, X], [0, 0, 0]] }]"), "objects[0].transform[0]"),
+        (scene("[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 1], [1, X, 1], [0, 1, 1]]"), "objects[0].vertices"),
+        (scene(&format!("{tri}normals = [[0, 0, 1], [0, 0, 1], [0, X, 1]]")), "objects[0].normals"),
+        (scene(&format!("{tri}uvs = [[0, 0], [1, X], [0, 1]]")), "objects[0].uvs"),
+    ];
+    let mut wrong = Vec::new();
+    for (template, field) in &cases {
+        for x in ["nan", "inf", "-inf"] {
+            let text = template.replace('X', x);
+            let line = 1 + text.lines().position(|l| l.contains(x)).unwrap();
+            match load(&text) {
+                Ok(_) => wrong.push(format!("{field} = {x}: accepted")),
+                Err(e) if e.line != line || !e.field.contains(field) || e.column < 1 => wrong
+                    .push(format!("{field} = {x}: refused at line {}, field {} (expected line {line}, a field naming {field}): {e}", e.line, e.field)),
+                Err(_) => {}
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "non-finite numbers not refused where they are written (renderer/src/scene/*_desc.rs, nodes.rs):\n{}", wrong.join("\n"));
 }

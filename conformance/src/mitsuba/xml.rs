@@ -275,6 +275,8 @@ impl Exporter<'_> {
         outer: &Affine64,
         inherited: Option<u32>,
     ) -> Result<(), ExportError> {
+        // A shape in mixed precision is written as the scene placed it.
+        let inst = &*inst.unanchored();
         // Inputs rounded to f32 first, so that the f32 and f64 builds compose them with the
         // same f64 arithmetic and export the same text (and references stay shared).
         let local = match &inst.xf {
@@ -384,6 +386,7 @@ impl Exporter<'_> {
             Shape::Cone { .. } => return Err(ExportError::Unsupported("the cone")),
             Shape::Plane => return Err(ExportError::Unsupported("the infinite plane")),
             Shape::Group(_) => unreachable!("groups are flattened above"),
+            Shape::Anchored(_) => unreachable!("written as the scene placed it (unanchored)"),
         }
         Ok(())
     }

@@ -194,6 +194,8 @@ impl Exporter<'_> {
     }
 
     fn instance(&mut self, inst: &Instance, top: bool) -> String {
+        // A shape in mixed precision is written as the scene placed it.
+        let inst = &*inst.unanchored();
         let shape = self.shape(&inst.shape);
         let mut mods = String::new();
         // A top-level object goes from render space back to the scene's own coordinates.
@@ -291,6 +293,7 @@ impl Exporter<'_> {
                 self.meshes.insert(key, name.clone());
                 name
             }
+            Shape::Anchored(_) => unreachable!("written as the scene placed it (unanchored)"),
             Shape::Group(g) => {
                 let key = std::sync::Arc::as_ptr(g) as usize;
                 if let Some(name) = self.defs.get(&key) {

@@ -8,6 +8,11 @@ use toml::Spanned;
 /// A 3-vector in the file.
 pub type V3 = Exact<f64, 3>;
 
+/// A vector of the file as a glam vector.
+pub fn dv(v: V3) -> glam::DVec3 {
+    glam::DVec3::from_array(v.0)
+}
+
 /// A TOML array of exactly `N` elements. serde's fixed-size arrays read the first `N`
 /// elements and ignore the rest; this refuses an array of any other length, so
 /// `translate = [1, 0, 0, 99]` is an error, not a translation by (1, 0, 0).
@@ -190,6 +195,10 @@ pub struct RenderDesc {
     /// Physical model: every light at each vertex, or one chosen uniformly.
     #[serde(default)]
     pub light_sampling: super::settings::LightSampling,
+    /// Intersect in mixed precision the instances the build's precision cannot resolve
+    /// (on unless turned off; renderer/docs/precision.md, "Scale against view").
+    #[serde(default = "yes")]
+    pub mixed_precision: bool,
 }
 
 fn yes() -> bool {
@@ -345,7 +354,7 @@ pub struct NodeDesc {
     /// Triangle: per-vertex shading normals.
     pub normals: Option<Spanned<Exact<V3, 3>>>,
     /// Triangle: per-vertex uv.
-    pub uvs: Option<Exact<Exact<f64, 2>, 3>>,
+    pub uvs: Option<Spanned<Exact<Exact<f64, 2>, 3>>>,
     /// Mesh: OBJ file, relative to the scene file.
     pub file: Option<Spanned<String>>,
     /// Instance: the definition's name.

@@ -4,9 +4,18 @@
 //! `crate::material`); the integrators read the scene, and nothing here reads them.
 
 pub mod build;
+mod camera_desc;
+mod definitions;
 pub mod error;
 pub mod format;
+mod lights_desc;
+mod materials_desc;
+mod nodes;
+mod numbers;
+mod origin;
+pub mod scale_check;
 pub mod settings;
+mod transform_ops;
 
 use crate::aggregate::Aggregate;
 use crate::camera::Camera;
@@ -34,11 +43,15 @@ pub struct Scene {
     pub area_lights: Vec<AreaLight>,
     /// For each object id, the index of its area light, or `u32::MAX`.
     pub area_light_of: Vec<u32>,
+    /// The scene's objects whose own size is too large next to the distances the camera
+    /// sees for the build's precision, each moved to mixed precision or warned about
+    /// (`scale_check`, renderer/docs/precision.md).
+    pub scale_notes: Vec<scale_check::ScaleNote>,
 }
 
 impl Scene {
     /// The world point at render space's origin: 0, or the eye when the scene was moved
-    /// there for precision (scene/build.rs, `render_origin`). Hit points, lights and the
+    /// there for precision (scene/origin.rs, `render_origin`). Hit points, lights and the
     /// camera are in render space; add this to report world coordinates.
     pub fn origin(&self) -> glam::DVec3 {
         self.camera.origin()

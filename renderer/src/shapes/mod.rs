@@ -18,6 +18,7 @@
 //! Every hit returns t, the outward geometric normal (not normalized; the normal of the
 //! face the ray hit, even from inside), a shading normal and uv.
 
+pub mod anchored;
 pub(crate) mod cone;
 pub(crate) mod cube;
 pub(crate) mod cylinder;

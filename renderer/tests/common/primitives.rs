@@ -84,6 +84,7 @@ pub fn name(s: &Shape) -> &'static str {
         Shape::Triangle(_) => "triangle",
         Shape::Mesh(_) => "mesh",
         Shape::Group(_) => "group",
+        Shape::Anchored(_) => "anchored",
     }
 }
 
@@ -167,6 +168,16 @@ pub fn surface_distance(s: &Shape, p: DVec3) -> f64 {
             })
             .fold(f64::INFINITY, f64::min),
         Shape::Group(_) => unreachable!(),
+        // The canonical shape, about its anchor.
+        Shape::Anchored(a) => {
+            use renderer::shapes::anchored::Kind;
+            let canonical = match a.kind {
+                Kind::Sphere => Shape::Sphere,
+                Kind::Cube => Shape::Cube,
+                Kind::Cylinder { capped } => Shape::Cylinder { capped },
+            };
+            surface_distance(&canonical, p + a.a)
+        }
     }
 }
 
