@@ -482,6 +482,8 @@ fn test27_a_bad_number_says_number() {
         e.message.contains("a whole number") && !e.message.contains("u32"),
         "a Rust type name in the message: {e}"
     );
+}
+
 #[test]
 fn test28_no_array_field_lets_a_non_finite_number_through() {
     // Every array field of the format, each with `X` where a number goes: with `nan`,
