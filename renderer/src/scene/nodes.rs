@@ -2,7 +2,6 @@
 //! definitions resolved, meshes loaded once per file, each node validated where it is
 //! written.
 
-use crate::suggest::did_you_mean;
 use super::error::{SceneError, Source};
 use super::format::dv;
 use super::format::{NodeDesc, NodeKind};
@@ -11,6 +10,7 @@ use super::transform_ops::op_affine;
 use crate::aggregate::{Aggregate, Instance, Shape, INHERIT};
 use crate::real::{dvec3, vec3, Real, Vec2};
 use crate::shapes::{Mesh, Triangle};
+use crate::suggest::did_you_mean;
 use crate::transform::{Affine64, Transform};
 use glam::{DMat3, DVec3};
 use std::collections::{BTreeMap, HashMap, HashSet};
