@@ -47,6 +47,7 @@ def main():
           "(shared with other tenants: wall-clock figures move by up to 2x between runs; the ratios, measured "
           "in alternating pairs in one run, move much less).", ""]
     data = {"measured": when, "quick": quick, "build": BUILD}
+    text = "\n".join(md)
     for name, fn in (("embree", embree), ("povray", povray), ("mitsuba", mitsuba), ("growth", growth)):
         if only and name not in only:
             continue
@@ -54,9 +55,11 @@ def main():
         part, d = fn(outdir, quick)
         md += part + [""]
         data.update(d)
-    text = "\n".join(md)
-    open(os.path.join(outdir, "peers.md"), "w").write(text)
-    json.dump(data, open(os.path.join(outdir, "peers.json"), "w"), indent=1, default=str)
+        # Written after each part, so that a run stopped in a later part keeps the
+        # finished parts' tables.
+        text = "\n".join(md)
+        open(os.path.join(outdir, "peers.md"), "w").write(text)
+        json.dump(data, open(os.path.join(outdir, "peers.json"), "w"), indent=1, default=str)
     print(text)
 
 
