@@ -47,6 +47,9 @@ LIGHT_PATHS = 0.25
 # Mitsuba's llvm variant holds every sample of a render in flight at once; the references'
 # thousands of samples a pixel are rendered as passes of this many, with their own seeds.
 REF_PASS_SPP = 128
+# The configurations of each side timed in every pair at their crossing counts (the rest
+# once, in the first pair).
+FINALISTS = 2
 
 
 def crossing(pts, target):
@@ -141,7 +144,7 @@ def mitsuba(outdir, quick):
     d = os.path.join(outdir, "mitsuba")
     os.makedirs(d, exist_ok=True)
     size = 128 if quick else 256
-    ref_spp = 256 if quick else 1024
+    ref_spp = 256 if quick else 512
     top = 16 if quick else 256
     same_spp = 16 if quick else 64
     pairs = 1 if quick else 3
@@ -164,11 +167,14 @@ def mitsuba(outdir, quick):
                f"(`{VARIANT}`, the mean of seeds 0 and 1). Errors are the images' own: taken against the mean of two "
                f"{ref_spp}-spp Mitsuba `{REF_SAMPLER}` references (seeds from 1000 and 2000 up, {REF_PASS_SPP} spp a "
                "pass), the references' own noise (a quarter of their mean squared difference) taken off. Each "
-               f"sampler renders at {', '.join(map(str, ladder))} spp (the counts each really takes), then, up to "
+               f"sampler renders at {', '.join(map(str, ladder))} spp (the counts each really takes; from 16 spp on, it "
+               "stops at the first count whose error is at or below the target), then, up to "
                "eight times, at the counts it can take nearest the crossing on either side; the count where its "
                "error reaches the target is interpolated between the two measured around it (log-log). That count, "
                "rounded up to one the sampler takes, is then rendered and timed, in alternating pairs: the time is "
-               "a real render's. Ours: " + ", ".join(OURS_CONFIGS) + " (`adaptive`: adaptive sampling, its count "
+               f"a real render's. The first pair times every configuration of both sides; the others only each "
+               f"side's {FINALISTS} fastest in the first (the best is the fastest median of those; the fixed-count "
+               "column's time is its first pair's). Ours: " + ", ".join(OURS_CONFIGS) + " (`adaptive`: adaptive sampling, its count "
                f"the average the pixels took; `light`: {LIGHT_PATHS} light paths per camera sample, in the scenes "
                "where they are on; `noguides`: no specular guides, on by default in path scenes; `one`: one light "
                "a vertex, as Mitsuba, where ours takes every light by default; a configuration that renders "
@@ -261,16 +267,24 @@ def mitsuba(outdir, quick):
         target = (own(mi_render("independent", top, seed=0)[1]) + own(mi_render("independent", top, seed=1)[1])) / 2
 
         def same_images(a, b):
-            # Whether our configurations a and b gave the same bits at every ladder count.
+            # Whether our configurations a and b gave the same bits at every ladder count
+            # both rendered (each ladder renders 4 and 16 spp at least).
             files = lambda c, spp: os.path.join(d, f"{name}_ours_{c.replace(' ', '_')}_{spp}.exr")
-            return all(open(files(a, spp), "rb").read() == open(files(b, spp), "rb").read() for spp in ladder)
+            both = [spp for spp in ladder if os.path.exists(files(a, spp)) and os.path.exists(files(b, spp))]
+            return bool(both) and all(open(files(a, spp), "rb").read() == open(files(b, spp), "rb").read()
+                                      for spp in both)
 
         def ladder_of(render):
-            # Each point at the count the render really took: (count, error).
+            # Each point at the count the render really took: (count, error). The ladder
+            # stops at the first count whose error is at or below the target (but never
+            # before 16 spp): the crossing lies below it, and the counts above it (the
+            # costliest renders of the ladder) would not move it.
             out = []
             for spp in ladder:
                 _, img, n = render(spp)
                 out.append((n, own(img)))
+                if spp >= 16 and out[-1][1] <= target:
+                    break
             return out
 
         def ours_between(lo, hi):
@@ -324,20 +338,28 @@ def mitsuba(outdir, quick):
                 c += 1
             return c
 
-        # Real renders at each crossing count, in alternating pairs.
+        # Real renders at each crossing count, in alternating pairs. The first pair
+        # renders every configuration of both sides once; the other pairs only each
+        # side's FINALISTS fastest in it (the rest are left with their one time: a
+        # configuration more than a few per cent behind the second in one render is
+        # not the best, and three renders of every one were most of the part's time).
         ours_t = {c: [] for c in configs}
         mi_t = {s: [] for s in MI_SAMPLERS}
+        ours_in, mi_in = list(configs), list(MI_SAMPLERS)
         for k in range(pairs):
-            for c in configs:
+            if k == 1:
+                ours_in = sorted(configs, key=lambda c: ours_t[c][0])[:FINALISTS]
+                mi_in = sorted(MI_SAMPLERS, key=lambda s: mi_t[s][0])[:FINALISTS]
+            for c in ours_in:
                 ours_t[c].append(ours_render(c, ours_count(c))[0])
-            for s in MI_SAMPLERS:
+            for s in mi_in:
                 mi_t[s].append(mi_render(s, mi_count_at(s), seed=k, timed=True)[0])
-        ours_best = min(configs, key=lambda c: med(ours_t[c]))
-        best = min(MI_SAMPLERS, key=lambda s: med(mi_t[s]))
+        ours_best = min(ours_in, key=lambda c: med(ours_t[c]))
+        best = min(mi_in, key=lambda s: med(mi_t[s]))
         fixed = [c for c in configs if "adaptive" not in c.split(" ")]
-        fixed_best = min(fixed, key=lambda c: med(ours_t[c]))
+        fixed_best = min(fixed, key=lambda c: ours_t[c][0])
         ratios = [a / b for a, b in zip(ours_t[ours_best], mi_t[best])]
-        fixed_ratio = med(ours_t[fixed_best]) / med(mi_t[best])
+        fixed_ratio = ours_t[fixed_best][0] / mi_t[best][0]
         rows.append({"scene": name, "catalog": name in CATALOG, "same_spp": same_spp,
                      "ours_msps": ours_rate, "llvm_msps": llvm_rate, "scalar_msps": scalar_rate,
                      "same_ratio": med(r_llvm), "same_spread": spread(r_llvm),
