@@ -8,6 +8,7 @@ pub mod gate;
 pub mod images;
 pub mod manifest;
 pub mod mitsuba;
+pub mod oracle;
 pub mod povray;
 pub mod report;
 pub mod verdict;
