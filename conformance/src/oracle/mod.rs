@@ -8,14 +8,20 @@
 //! - `shapes.rs`: closed-form intersections;
 //! - `intersect.rs`: the closest hit, instances mapped by M⁻¹ and normals by M⁻ᵀ;
 //! - `shade.rs`: POV-Ray's illumination terms and recursion;
-//! - `vote.rs`: the three-way comparison with POV-Ray and our renderer.
+//! - `vote.rs`: the three-way comparison with POV-Ray and our renderer;
+//! - `harness.rs`, `outcome.rs`, `reference.rs`: the oracle as a registered reference.
 
 pub mod camera;
+pub mod harness;
 pub mod intersect;
+pub mod outcome;
+pub mod reference;
 pub mod shade;
 pub mod shapes;
 pub mod vote;
 pub mod world;
+
+pub use reference::ClosedForm;
 
 use crate::povray::compare::Sample;
 use camera::Camera;

@@ -5,79 +5,123 @@
 //!
 //! | pair | render side (re-traced) | reference side | tolerance |
 //! |---|---|---|---|
-//! | ours vs POV-Ray | ours | POV-Ray's half-float EXR | `tol(r)`: half rounding |
-//! | oracle vs POV-Ray | oracle | POV-Ray's half-float EXR | `tol(r)`: half rounding |
-//! | ours vs oracle | ours | oracle (`f64`, as `f32`) | `tol(r)`, which bounds ours |
+//! | ours~POV-Ray | ours | POV-Ray's half-float EXR | `tol(r)`: half rounding |
+//! | oracle~POV-Ray | oracle | POV-Ray's half-float EXR | `tol(r)`: half rounding |
+//! | ours~oracle | ours | oracle (`f64`, as `f32`) | `tol(r)`, which bounds ours |
 //!
 //! conformance/docs/oracle.md derives why the same `tol` serves all three.
 
 use super::Oracle;
 use crate::catalog::{load, Entry};
-use crate::povray::compare::{compare, tol, Comparison};
+use crate::povray::compare::{compare, error_in_tolerances, Comparison};
 use crate::povray::harness::{compare_render, read_reference, render_for_conformance};
 use anyhow::{ensure, Result};
-use renderer::render::Options;
+use renderer::render::{Image, Options};
+use renderer::scene::Scene;
+
+/// The pairs of a vote, as the report and the failure messages name them.
+pub const PAIRS: [&str; 3] = ["ours~POV-Ray", "oracle~POV-Ray", "ours~oracle"];
 
 /// The three comparisons of one scene.
 pub struct Vote {
     /// Scene name.
     pub scene: String,
-    /// Ours against POV-Ray.
-    pub ours_povray: Comparison,
-    /// The oracle against POV-Ray.
-    pub oracle_povray: Comparison,
+    /// Ours against POV-Ray (`None` without a fresh POV-Ray reference).
+    pub ours_povray: Option<Comparison>,
+    /// The oracle against POV-Ray (`None` without a fresh POV-Ray reference).
+    pub oracle_povray: Option<Comparison>,
     /// Ours against the oracle.
     pub ours_oracle: Comparison,
     /// The oracle's image (RGB).
     pub oracle_rgb: Vec<f32>,
     /// Our image (RGB).
     pub ours_rgb: Vec<f32>,
-    /// POV-Ray's reference (RGB).
-    pub povray_rgb: Vec<f32>,
+    /// POV-Ray's reference (RGB), when fresh.
+    pub povray_rgb: Option<Vec<f32>>,
 }
 
-/// Who agrees with whom, in words: "all three agree", or which pair disagrees.
 impl Vote {
-    /// One line: each pair's verdict.
-    pub fn summary(&self) -> String {
-        let word = |c: &Comparison| if c.passed() { "agree" } else { "DISAGREE" };
-        format!(
-            "ours~POV-Ray {} ({} failing), oracle~POV-Ray {} ({} failing), ours~oracle {} ({} failing)",
-            word(&self.ours_povray),
-            self.ours_povray.failing,
-            word(&self.oracle_povray),
-            self.oracle_povray.failing,
-            word(&self.ours_oracle),
-            self.ours_oracle.failing,
-        )
+    /// The vote on `scene`, given our image and, when POV-Ray's reference is fresh, its
+    /// pixels and the comparison of ours with them (the POV-Ray harness's).
+    pub fn new(
+        scene: &Scene,
+        name: &str,
+        oracle: &Oracle,
+        ours: &Image,
+        povray: Option<(Vec<f32>, Comparison)>,
+    ) -> Vote {
+        let (w, h) = oracle.size();
+        let oracle_rgb = oracle.render();
+        let sample = |x: f64, y: f64| oracle.sample(x, y);
+        let oracle_povray = povray
+            .as_ref()
+            .map(|(p, _)| compare(&oracle_rgb, p, w, h, &sample));
+        let ours_oracle = compare_render(scene, &Options::default(), ours, &oracle_rgb);
+        let (povray_rgb, ours_povray) = povray.unzip();
+        Vote {
+            scene: name.into(),
+            ours_povray,
+            oracle_povray,
+            ours_oracle,
+            oracle_rgb,
+            ours_rgb: ours.rgb.clone(),
+            povray_rgb,
+        }
     }
-}
 
-/// The pairs of a vote, as the report and the failure messages name them.
-pub const PAIRS: [&str; 3] = ["ours~POV-Ray", "oracle~POV-Ray", "ours~oracle"];
-
-impl Vote {
-    /// The comparison of each pair of [`PAIRS`], in that order.
-    pub fn pairs(&self) -> [&Comparison; 3] {
-        [&self.ours_povray, &self.oracle_povray, &self.ours_oracle]
+    /// The comparison of each pair of [`PAIRS`], in that order (`None` without a fresh
+    /// POV-Ray reference).
+    pub fn pairs(&self) -> [Option<&Comparison>; 3] {
+        [
+            self.ours_povray.as_ref(),
+            self.oracle_povray.as_ref(),
+            Some(&self.ours_oracle),
+        ]
     }
 
-    /// Whether the oracle's checks pass: ours agrees with the oracle and the oracle with
-    /// POV-Ray (ours against POV-Ray is the POV-Ray reference's own check).
+    /// Whether the oracle's checks pass: ours agrees with the oracle, and the oracle with
+    /// POV-Ray when there is a fresh POV-Ray reference (ours against POV-Ray is the
+    /// POV-Ray reference's own check).
     pub fn passed(&self) -> bool {
-        self.oracle_povray.passed() && self.ours_oracle.passed()
+        self.ours_oracle.passed() && self.oracle_povray.as_ref().is_none_or(|c| c.passed())
+    }
+
+    /// Who agrees with whom: each pair's word, and its failing pixels when it disagrees.
+    pub fn summary(&self) -> String {
+        let word = |c: Option<&Comparison>| match c {
+            None => "no POV-Ray reference".to_string(),
+            Some(c) if c.passed() => "agree".to_string(),
+            Some(c) => format!("DISAGREE ({} failing, {} excused)", c.failing, c.silhouette),
+        };
+        PAIRS
+            .iter()
+            .zip(self.pairs())
+            .map(|(name, c)| format!("{name} {}", word(c)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    /// How far pixel `k` is outside the tolerance in the pair `pair` (index into
+    /// [`PAIRS`]), in tolerances.
+    pub fn error(&self, pair: usize, k: usize) -> f64 {
+        let povray = self.povray_rgb.as_deref().unwrap_or(&self.oracle_rgb);
+        match pair {
+            0 => error_in_tolerances(&self.ours_rgb, povray, k),
+            1 => error_in_tolerances(&self.oracle_rgb, povray, k),
+            _ => error_in_tolerances(&self.ours_rgb, &self.oracle_rgb, k),
+        }
     }
 
     /// For each pair that disagrees: the scene, the pair, and up to `n` of its failing
     /// pixels (x, y) with the three values, worst first.
     pub fn failure_message(&self, n: usize) -> String {
-        let (ours, povray) = (&self.ours_rgb[..], &self.povray_rgb[..]);
         let mut out = String::new();
         let w = self.ours_oracle.size.0;
-        for (name, c) in PAIRS.iter().zip(self.pairs()) {
-            if c.passed() {
+        let px = |img: &[f32], k: usize| [img[3 * k], img[3 * k + 1], img[3 * k + 2]];
+        for (pair, (name, c)) in PAIRS.iter().zip(self.pairs()).enumerate() {
+            let Some(c) = c.filter(|c| !c.passed()) else {
                 continue;
-            }
+            };
             out += &format!(
                 "{}: {name} DISAGREE: {} failing pixels, {} excused (budget {})\n",
                 self.scene,
@@ -85,28 +129,17 @@ impl Vote {
                 c.silhouette,
                 c.budget()
             );
-            let px = |img: &[f32], k: usize| [img[3 * k], img[3 * k + 1], img[3 * k + 2]];
-            let err = |k: usize| {
-                let (a, r) = match *name {
-                    "ours~POV-Ray" => (px(ours, k), px(povray, k)),
-                    "oracle~POV-Ray" => (px(&self.oracle_rgb, k), px(povray, k)),
-                    _ => (px(ours, k), px(&self.oracle_rgb, k)),
-                };
-                (0..3)
-                    .map(|i| (a[i] as f64 - r[i] as f64).abs() / tol(r[i] as f64))
-                    .fold(0.0, f64::max)
-            };
             let mut bad: Vec<usize> = (0..c.class.len()).filter(|&k| c.class[k] == 2).collect();
-            bad.sort_by(|&a, &b| err(b).total_cmp(&err(a)));
+            bad.sort_by(|&a, &b| self.error(pair, b).total_cmp(&self.error(pair, a)));
             for &k in bad.iter().take(n) {
                 out += &format!(
                     "  pixel ({}, {}): ours {:?}, oracle {:?}, POV-Ray {:?} ({:.1} tolerances)\n",
                     k % w,
                     k / w,
-                    px(ours, k),
+                    px(&self.ours_rgb, k),
                     px(&self.oracle_rgb, k),
-                    px(povray, k),
-                    err(k)
+                    self.povray_rgb.as_deref().map(|p| px(p, k)),
+                    self.error(pair, k)
                 );
             }
         }
@@ -114,8 +147,8 @@ impl Vote {
     }
 }
 
-/// Runs the vote on one POV-Ray catalog scene, or says why the oracle declines it
-/// (`Ok(Err(reason))`).
+/// Runs the vote on one POV-Ray catalog scene against the POV-Ray image at `reference`,
+/// or says why the oracle declines it (`Ok(Err(reason))`).
 pub fn vote(
     entry: &Entry,
     reference: &std::path::Path,
@@ -132,16 +165,12 @@ pub fn vote(
         entry.name
     );
     let ours = render_for_conformance(&scene);
-    let oracle_rgb = oracle.render();
-    let opts = Options::default();
-    let sample = |x: f64, y: f64| oracle.sample(x, y);
-    Ok(Ok(Vote {
-        scene: entry.name.clone(),
-        ours_povray: compare_render(&scene, &opts, &ours, &povray),
-        oracle_povray: compare(&oracle_rgb, &povray, w, h, &sample),
-        ours_oracle: compare_render(&scene, &opts, &ours, &oracle_rgb),
-        oracle_rgb,
-        ours_rgb: ours.rgb,
-        povray_rgb: povray,
-    }))
+    let cmp = compare_render(&scene, &Options::default(), &ours, &povray);
+    Ok(Ok(Vote::new(
+        &scene,
+        &entry.name,
+        &oracle,
+        &ours,
+        Some((povray, cmp)),
+    )))
 }
