@@ -180,7 +180,8 @@ impl World {
         let dir = to / dist;
         // Attenuate_Light (source/backend/lighting/point.cpp).
         let fade = match l.fade {
-            Some((fd, fp)) if fp > 0.0 && fd.abs() > EPSILON => 2.0 / (1.0 + (dist / fd).powf(fp)),
+            Some((fd, fp)) if fp > 0.0 && fd.abs() >= EPSILON => 2.0 / (1.0 + (dist / fd).powf(fp)),
+            Some((_, fp)) if fp > 0.0 => dist.powf(-fp),
             _ => 1.0,
         };
         let mut lc = l.color * fade;

@@ -48,8 +48,8 @@ pub enum Primitive {
     Triangle([DVec3; 3]),
 }
 
-/// POV-Ray ignores a plane's hits beyond `MAX_DISTANCE` (1e7; source/core/configcore.h,
-/// used by source/core/shape/plane.cpp, `Plane::Intersect`).
+/// POV-Ray ignores a plane's hits beyond `MAX_DISTANCE` (1e7; source/backend/frame.h in 3.7,
+/// used by source/backend/shape/planes.cpp, `Plane::Intersect`).
 pub const MAX_DISTANCE: f64 = 1e7;
 
 /// Keeps the nearer of two candidates.
