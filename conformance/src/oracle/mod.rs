@@ -180,15 +180,13 @@ material = "m"
 
     #[test]
     fn test04_it_declines_what_it_does_not_model_and_says_why() {
-        let text = std::fs::read_to_string(
-            crate::catalog::repo_root().join("conformance/scenes/povray/prim_mesh_identity.toml"),
-        )
-        .unwrap();
-        let dir = crate::catalog::repo_root().join("conformance/scenes/povray");
-        let scene = Scene::from_str(&text, &dir.join("prim_mesh_identity.toml"), &dir).unwrap();
+        let dir = crate::catalog::repo_root().join("conformance/scenes/mitsuba");
+        let path = dir.join("mi_diffuse_point.toml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let scene = Scene::from_str(&text, &path, &dir).unwrap();
         let why = Oracle::new(&scene)
             .err()
-            .expect("a smooth mesh is declined");
-        assert!(why.contains("shading normals"), "{why}");
+            .expect("a physically based scene is declined");
+        assert!(why.contains("physically based integrator"), "{why}");
     }
 }

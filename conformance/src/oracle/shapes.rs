@@ -14,7 +14,7 @@
 //! | cone | x² + z² = ((1 − y)/2)², \|y\| ≤ 1, base y = −1 | `cone { -y, 1, y, 0 [open] }` |
 //! | disk | y = 0, x² + z² ≤ 1 | `disc { 0, y, 1 }` |
 //! | rectangle | y = 0, \|x\| ≤ 1, \|z\| ≤ 1 | `polygon` of its 4 corners |
-//! | triangle | the plane of its vertices, inside its edges | `triangle` |
+//! | triangle | the plane of its vertices, inside its edges | `triangle`, `smooth_triangle` |
 
 use glam::DVec3;
 
@@ -44,8 +44,8 @@ pub enum Primitive {
     Disk,
     /// [−1, 1]² in y = 0.
     Rectangle,
-    /// A flat triangle (object-space vertices).
-    Triangle([DVec3; 3]),
+    /// A triangle (object-space vertices), with per-vertex normals when smooth.
+    Triangle([DVec3; 3], Option<[DVec3; 3]>),
 }
 
 /// POV-Ray ignores a plane's hits beyond `MAX_DISTANCE` (1e7; source/backend/frame.h in 3.7,
@@ -129,7 +129,7 @@ impl Primitive {
                     p.x * p.x + p.z * p.z - 0.25 * h * h,
                 )
             }
-            Primitive::Triangle(v) => {
+            Primitive::Triangle(v, _) => {
                 let dn = d.dot(n);
                 if dn == 0.0 {
                     0.0
@@ -145,6 +145,7 @@ impl Primitive {
             Primitive::Cone { .. } if n != -DVec3::Y => {
                 DVec3::new(2.0 * q.x, 0.5 * (1.0 - q.y), 2.0 * q.z)
             }
+            Primitive::Triangle(v, Some(vn)) => smooth_normal(v, vn, q, n),
             _ => n,
         };
         (t + s, n, q)
@@ -160,7 +161,7 @@ impl Primitive {
             Primitive::Cone { capped } => cone(o, d, lo, hi, *capped),
             Primitive::Disk => flat(o, d, lo, hi, |p| p.x * p.x + p.z * p.z <= 1.0),
             Primitive::Rectangle => flat(o, d, lo, hi, |p| p.x.abs() <= 1.0 && p.z.abs() <= 1.0),
-            Primitive::Triangle(v) => triangle(v, o, d, lo, hi),
+            Primitive::Triangle(v, _) => triangle(v, o, d, lo, hi),
         }
     }
 }
@@ -274,6 +275,31 @@ fn cone(o: DVec3, d: DVec3, lo: f64, hi: f64, capped: bool) -> Option<Root> {
         }
     }
     best
+}
+
+/// A smooth triangle's normal at its point `q`: the vertex normals interpolated by `q`'s
+/// barycentric weights. POV-Ray (`Mesh::Smooth_Mesh_Normal`, `SmoothTriangle::Normal`)
+/// interpolates in two steps, from N1 by u (the fraction of the way from P1 to the edge
+/// P2–P3) and along that edge by v: `N1 + u·(N2 − N1 + v·(N3 − N2))`, which is
+/// `(1 − u)·N1 + u(1 − v)·N2 + uv·N3`, the barycentric interpolation itself. Where the
+/// interpolated normal vanishes, the geometric one `n` is kept.
+fn smooth_normal(v: &[DVec3; 3], vn: &[DVec3; 3], q: DVec3, n: DVec3) -> DVec3 {
+    // q − v0 = b1·e1 + b2·e2, solved through the Gram matrix.
+    let (e1, e2, w) = (v[1] - v[0], v[2] - v[0], q - v[0]);
+    let (a, b, c) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let det = a * c - b * b;
+    if det == 0.0 {
+        return n;
+    }
+    let (p, r) = (w.dot(e1), w.dot(e2));
+    let b1 = (c * p - b * r) / det;
+    let b2 = (a * r - b * p) / det;
+    let s = (1.0 - b1 - b2) * vn[0] + b1 * vn[1] + b2 * vn[2];
+    if s.length_squared() > 0.0 {
+        s
+    } else {
+        n
+    }
 }
 
 /// Möller and Trumbore's barycentric solve (1997), in `f64`.
@@ -411,7 +437,7 @@ mod tests {
             [0.0, -1.0, 0.0],
             Some((1.0, [0.0, 1.0, 0.0])),
         );
-        let tri = Primitive::Triangle([DVec3::ZERO, DVec3::X, DVec3::Y]);
+        let tri = Primitive::Triangle([DVec3::ZERO, DVec3::X, DVec3::Y], None);
         check(
             tri.clone(),
             [0.2, 0.2, -1.0],

@@ -9,9 +9,8 @@
 //! inheritance); nothing of its intersection, shading, camera or BVH code is used.
 //!
 //! The oracle declines a scene with anything it does not model, naming it: the physical
-//! integrators, more than one sample a pixel, lights other than points, area lights,
-//! meshes and triangles with shading normals (POV-Ray's `smooth_triangle` interpolates
-//! normals its own way), and a scene moved to a render-space origin.
+//! integrators, more than one sample a pixel, lights other than points, area lights, and
+//! a scene moved to a render-space origin.
 
 use super::shapes::Primitive;
 use glam::{DMat3, DVec3};
@@ -250,21 +249,18 @@ impl World {
                 Shape::Disk => Primitive::Disk,
                 Shape::Rectangle => Primitive::Rectangle,
                 Shape::Triangle(t) => {
-                    if t.n.is_some() {
-                        return Err(
-                            "a triangle with shading normals (POV-Ray's smooth_triangle)".into(),
-                        );
-                    }
-                    Primitive::Triangle(t.p.map(wide3))
+                    Primitive::Triangle(t.p.map(wide3), t.n.map(|n| n.map(wide3)))
                 }
                 Shape::Mesh(m) => {
-                    if m.normals.is_some() {
-                        return Err("a mesh with shading normals (POV-Ray's smooth mesh2)".into());
-                    }
                     for t in m.triangles_as_given() {
-                        let p = t.map(|i| wide3(m.positions[i as usize]));
+                        let at = |k: usize| t[k] as usize;
+                        let p = [0, 1, 2].map(|k| wide3(m.positions[at(k)]));
+                        let n = m
+                            .normals
+                            .as_ref()
+                            .map(|n| [0, 1, 2].map(|k| wide3(n[at(k)])));
                         self.objects.push(Object {
-                            prim: Primitive::Triangle(p),
+                            prim: Primitive::Triangle(p, n),
                             xf,
                             material: own.0,
                             interior: own.1,
