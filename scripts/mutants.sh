@@ -35,7 +35,9 @@ FILES=(
     -f 'renderer/src/spawn.rs'
     -f 'renderer/src/sampler.rs'
     -f 'renderer/src/shading.rs'
-    -f 'renderer/src/physical.rs'
+    -f 'renderer/src/physical/integrator.rs'
+    -f 'renderer/src/physical/bsdf.rs'
+    -f 'renderer/src/physical/vertex.rs'
     -f 'conformance/src/povray/compare.rs'
     -f 'conformance/src/mitsuba/compare.rs'
 )

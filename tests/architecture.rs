@@ -2,8 +2,14 @@
 //! conformance crate imports a module that imports it back (directly or through others),
 //! and the renderer never depends on the conformance crate.
 //!
-//! Edges are read from the source: every `crate::a::b` and `super::x` path outside
-//! comments, resolved to the longest module prefix (a re-export of the crate root is
+//! Modules are found as the compiler finds them: from `lib.rs`, each `mod x;` declares a
+//! child whose file is `x.rs` or `x/mod.rs` beside (or, from a non-`mod.rs` file, under)
+//! its parent's, or the file a `#[path = "…"]` names, relative to the declaring file's
+//! folder; the child's name is its module path (`physical::light_paths`), whatever its
+//! file is called. Edges are read from the source: every `crate::a::b`, `self::x`,
+//! `super::x` (from the real parent, and from inside an inline `mod tests { … }` the file's
+//! own module) and bare `child::x` path (a child the module declares) outside comments and
+//! strings, resolved to the longest module prefix (a re-export of the crate root is
 //! followed to the module it comes from). Declaring a child (`mod x;`) is not an edge;
 //! using its items is.
 
@@ -12,25 +18,6 @@ use std::path::{Path, PathBuf};
 
 fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// Module path of a source file relative to `src`: `lib.rs` is "", `a/mod.rs` is "a",
-/// `a/b.rs` is "a::b". Files under `bin/` and `main.rs` are separate crates and skipped.
-fn module_of(rel: &Path) -> Option<String> {
-    let parts: Vec<String> = rel
-        .iter()
-        .map(|p| p.to_string_lossy().into_owned())
-        .collect();
-    if parts[0] == "bin" || rel == Path::new("main.rs") {
-        return None;
-    }
-    let mut v: Vec<String> = parts.clone();
-    let last = v.pop()?;
-    let stem = last.strip_suffix(".rs")?;
-    if stem != "mod" && stem != "lib" {
-        v.push(stem.to_string());
-    }
-    Some(v.join("::"))
 }
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
@@ -47,6 +34,12 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 /// The code of a file without comments (line comments, doc comments, block comments) and
 /// without string literals' contents.
 fn code_only(text: &str) -> String {
+    strip(text, false)
+}
+
+/// `text` without comments, and without string literals' contents unless `keep_strings`
+/// (then without the braces in them).
+fn strip(text: &str, keep_strings: bool) -> String {
     let b = text.as_bytes();
     let mut out = String::with_capacity(text.len());
     let mut i = 0;
@@ -61,12 +54,25 @@ fn code_only(text: &str) -> String {
             }
             i += 2;
         } else if b[i] == b'"' {
+            let start = i;
             i += 1;
             while i < b.len() && b[i] != b'"' {
                 i += if b[i] == b'\\' { 2 } else { 1 };
             }
             i += 1;
-            out.push_str("\"\"");
+            if keep_strings {
+                // Braces inside a string would mislead the brace matching of inline
+                // modules; a `#[path]` never holds one.
+                out.extend(text[start..i.min(b.len())].chars().map(|c| {
+                    if c == '{' || c == '}' {
+                        ' '
+                    } else {
+                        c
+                    }
+                }));
+            } else {
+                out.push_str("\"\"");
+            }
         } else {
             out.push(b[i] as char);
             i += 1;
@@ -78,6 +84,15 @@ fn code_only(text: &str) -> String {
 /// Every path that starts with `head::` in `code`, as its segments (a `{` group is
 /// expanded one level: `crate::a::{b, c::d}` gives `a::b` and `a::c::d`).
 fn paths_after(code: &str, head: &str) -> Vec<Vec<String>> {
+    located_paths(code, head)
+        .into_iter()
+        .map(|(_, p)| p)
+        .collect()
+}
+
+/// [`paths_after`] with the offset of each path's head in `code`. A head that continues a
+/// path (`a::head::`) or a name (`xhead::`) does not start one.
+fn located_paths(code: &str, head: &str) -> Vec<(usize, Vec<String>)> {
     let ident = |c: char| c.is_alphanumeric() || c == '_';
     let mut out = Vec::new();
     let pat = format!("{head}::");
@@ -85,7 +100,9 @@ fn paths_after(code: &str, head: &str) -> Vec<Vec<String>> {
     while let Some(k) = code[from..].find(&pat) {
         let start = from + k;
         from = start + pat.len();
-        if start > 0 && ident(code[..start].chars().last().unwrap()) {
+        if start > 0 && ident(code[..start].chars().last().unwrap())
+            || code[..start].trim_end().ends_with("::")
+        {
             continue;
         }
         let rest = &code[from..];
@@ -114,29 +131,175 @@ fn paths_after(code: &str, head: &str) -> Vec<Vec<String>> {
                         .map(|x| x.trim().to_string())
                         .filter(|x| !x.is_empty() && x.chars().all(ident)),
                 );
-                out.push(s);
+                out.push((start, s));
             }
         } else {
-            out.push(segs);
+            out.push((start, segs));
         }
+    }
+    out
+}
+
+/// A crate's source files: path relative to `src` → text.
+type Sources = BTreeMap<PathBuf, String>;
+
+fn read_sources(src: &Path) -> Sources {
+    let mut files = Vec::new();
+    rust_files(src, &mut files);
+    files
+        .into_iter()
+        .map(|f| {
+            let text = std::fs::read_to_string(&f).unwrap();
+            (f.strip_prefix(src).unwrap().to_path_buf(), text)
+        })
+        .collect()
+}
+
+/// One module of the tree: its code (without comments and strings) and the children it
+/// declares.
+struct Module {
+    code: String,
+    children: BTreeSet<String>,
+}
+
+/// Every `mod NAME` item of `code`: where `mod` starts, NAME, and where the first
+/// character after NAME (`;` for a declaration, `{` for an inline module) is.
+fn mod_items(code: &str) -> Vec<(usize, String, usize)> {
+    let ident = |c: char| c.is_alphanumeric() || c == '_';
+    let mut out = Vec::new();
+    let mut from = 0;
+    while let Some(k) = code[from..].find("mod ") {
+        let at = from + k;
+        from = at + 4;
+        if at > 0 && ident(code[..at].chars().last().unwrap()) {
+            continue;
+        }
+        let rest = code[from..].trim_start();
+        let name: String = rest.chars().take_while(|&c| ident(c)).collect();
+        let after = rest[name.len()..].trim_start();
+        if !name.is_empty() {
+            out.push((at, name, code.len() - after.len()));
+        }
+    }
+    out
+}
+
+/// The `mod x;` declarations of a file outside inline modules, with the file a
+/// `#[path = "…"]` on each names.
+fn declarations(text: &str) -> Vec<(String, Option<String>)> {
+    let code = strip(text, true);
+    let inline = inline_modules(&code);
+    let mut out = Vec::new();
+    for (at, name, next) in mod_items(&code) {
+        // Inside an inline module, a declaration names a file elsewhere: none here do.
+        if !code[next..].starts_with(';') || inline.iter().any(|(_, r)| r.contains(&at)) {
+            continue;
+        }
+        // The attributes since the previous item.
+        let item_start = code[..at].rfind([';', '}', '{']).map_or(0, |e| e + 1);
+        let attrs = &code[item_start..at];
+        let path = attrs.find("#[path").map(|p| {
+            let q = attrs[p..].find('"').unwrap() + p + 1;
+            let e = attrs[q..].find('"').unwrap() + q;
+            attrs[q..e].to_string()
+        });
+        out.push((name, path));
+    }
+    out
+}
+
+/// The inline modules of a file's code (`mod tests { … }`): name and byte range.
+fn inline_modules(code: &str) -> Vec<(String, std::ops::Range<usize>)> {
+    let mut out = Vec::new();
+    for (_, name, open) in mod_items(code) {
+        if !code[open..].starts_with('{') {
+            continue;
+        }
+        let mut depth = 0;
+        let mut end = code.len();
+        for (i, c) in code[open..].char_indices() {
+            match c {
+                '{' => depth += 1,
+                '}' => {
+                    depth -= 1;
+                    if depth == 0 {
+                        end = open + i + 1;
+                        break;
+                    }
+                }
+                _ => {}
+            }
+        }
+        out.push((name, open..end));
+    }
+    out
+}
+
+/// The modules of the crate in `sources`, found from `lib.rs` by their declarations.
+fn modules(sources: &Sources) -> BTreeMap<String, Module> {
+    let mut out = BTreeMap::new();
+    let mut todo = vec![(String::new(), PathBuf::from("lib.rs"))];
+    while let Some((name, file)) = todo.pop() {
+        let text = sources
+            .get(&file)
+            .unwrap_or_else(|| panic!("module `{name}`: no file {}", file.display()));
+        let dir = file.parent().unwrap_or(Path::new("")).to_path_buf();
+        let owns_dir = matches!(
+            file.file_name().and_then(|f| f.to_str()),
+            Some("lib.rs" | "mod.rs" | "main.rs")
+        );
+        let mut children = BTreeSet::new();
+        for (child, path) in declarations(text) {
+            let child_file = match path {
+                Some(p) => dir.join(p),
+                None => {
+                    let base = if owns_dir {
+                        dir.clone()
+                    } else {
+                        dir.join(file.file_stem().unwrap())
+                    };
+                    let flat = base.join(format!("{child}.rs"));
+                    if sources.contains_key(&flat) {
+                        flat
+                    } else {
+                        base.join(&child).join("mod.rs")
+                    }
+                }
+            };
+            let child_name = if name.is_empty() {
+                child.clone()
+            } else {
+                format!("{name}::{child}")
+            };
+            todo.push((child_name, child_file));
+            children.insert(child);
+        }
+        out.insert(
+            name,
+            Module {
+                code: code_only(text),
+                children,
+            },
+        );
     }
     out
 }
 
 /// The module graph of the library crate whose sources are in `src`.
 fn module_graph(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
-    let mut files = Vec::new();
-    rust_files(src, &mut files);
-    let mut code = BTreeMap::new();
-    for f in &files {
-        if let Some(m) = module_of(f.strip_prefix(src).unwrap()) {
-            code.insert(m, code_only(&std::fs::read_to_string(f).unwrap()));
-        }
-    }
+    graph_of(&read_sources(src))
+}
+
+/// The module graph of the crate in `sources`.
+fn graph_of(sources: &Sources) -> BTreeMap<String, BTreeSet<String>> {
+    let code = modules(sources);
     let modules: BTreeSet<String> = code.keys().cloned().collect();
     // The crate root's re-exports: name -> the module it comes from.
     let mut root_names = BTreeMap::new();
-    for p in paths_after(&code[""].replace("pub use ", "pub use crate::"), "crate") {
+    for p in paths_after(
+        &code[""].code.replace("pub use ", "pub use crate::"),
+        "crate",
+    ) {
         if let Some(name) = p.last() {
             root_names.insert(name.clone(), p[..p.len() - 1].join("::"));
         }
@@ -150,24 +313,54 @@ fn module_graph(src: &Path) -> BTreeMap<String, BTreeSet<String>> {
             .or_else(|| segs.first().and_then(|s| root_names.get(s).cloned()))
     };
     let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
-    for (m, text) in &code {
+    for (m, module) in &code {
         let deps = graph.entry(m.clone()).or_default();
         if m.is_empty() {
             continue; // the root only declares and re-exports
         }
-        let parent: Vec<String> = {
-            let mut v: Vec<String> = m.split("::").map(String::from).collect();
-            v.pop();
+        let text = &module.code;
+        let own: Vec<String> = m.split("::").map(String::from).collect();
+        let inline = inline_modules(text);
+        // The module a path at `at` is written in: the file's, and the inline modules
+        // around it.
+        let scope = |at: usize| -> Vec<String> {
+            let mut v = own.clone();
+            v.extend(
+                inline
+                    .iter()
+                    .filter(|(_, r)| r.contains(&at))
+                    .map(|(n, _)| n.clone()),
+            );
             v
         };
         let mut targets = Vec::new();
-        for p in paths_after(text, "crate") {
+        for (_, p) in located_paths(text, "crate") {
             targets.extend(resolve(&p));
         }
-        for p in paths_after(text, "super") {
-            let mut abs = parent.clone();
+        for (at, p) in located_paths(text, "self") {
+            let mut abs = scope(at);
             abs.extend(p);
-            targets.extend(resolve(&abs).or(Some(parent.join("::"))));
+            targets.extend(resolve(&abs));
+        }
+        for (at, p) in located_paths(text, "super") {
+            let mut abs = scope(at);
+            abs.pop();
+            // `super::super::x`: one level up for each.
+            let ups = p.iter().take_while(|s| *s == "super").count();
+            for _ in 0..ups {
+                abs.pop();
+            }
+            let parent = abs.join("::");
+            abs.extend(p.into_iter().skip(ups));
+            targets.extend(resolve(&abs).or(Some(parent)));
+        }
+        for child in &module.children {
+            for (_, p) in located_paths(text, child) {
+                let mut abs = own.clone();
+                abs.push(child.clone());
+                abs.extend(p);
+                targets.extend(resolve(&abs));
+            }
         }
         for t in targets {
             if t != *m && !t.is_empty() {
@@ -309,5 +502,134 @@ fn the_renderer_never_depends_on_conformance() {
             "{} uses the conformance crate",
             f.display()
         );
+    }
+}
+
+/// Sources from (path under `src`, text) pairs.
+fn sources(files: &[(&str, &str)]) -> Sources {
+    files
+        .iter()
+        .map(|(p, t)| (PathBuf::from(p), t.to_string()))
+        .collect()
+}
+
+fn set<const N: usize>(names: [&str; N]) -> BTreeSet<String> {
+    names.into_iter().map(String::from).collect()
+}
+
+#[test]
+fn the_checker_names_path_modules_and_sees_bare_child_paths() {
+    // The renderer's layout before issue 38: `physical` declared `light_paths` by
+    // `#[path]` and used it by a bare path, and `light_paths` used its parent (`super::*`)
+    // and the render loop, which used `physical`.
+    let old = [
+        ("lib.rs", "pub mod physical;\npub mod render;\n"),
+        (
+            "physical.rs",
+            "//! The model.\n#[path = \"light_paths.rs\"]\nmod light_paths;\npub(crate) use light_paths::fold;\npub struct PhysicalIntegrator;\n",
+        ),
+        (
+            "light_paths.rs",
+            "use super::*;\nuse crate::render::{add_moment_products, MOMENT_PAIRS};\npub fn fold() {}\n",
+        ),
+        (
+            "render.rs",
+            "use crate::physical::PhysicalIntegrator;\npub fn add_moment_products() {}\n#[cfg(test)]\nmod tests {\n    use super::*;\n}\n",
+        ),
+    ];
+    let g = graph_of(&sources(&old));
+    assert!(
+        !g.contains_key("light_paths"),
+        "a #[path] module named by its file: {g:?}"
+    );
+    assert_eq!(g["physical::light_paths"], set(["physical", "render"]));
+    assert_eq!(
+        g["physical"],
+        set(["physical::light_paths"]),
+        "bare child path"
+    );
+    // `super` inside render's inline `mod tests` is render itself: no edge.
+    assert_eq!(g["render"], set(["physical"]));
+    let c = find_cycle(&g).expect("physical and its child use each other");
+    assert!(c.contains(&"physical::light_paths".to_string()), "{c:?}");
+    let c = find_cycle(&top_level(&g)).expect("physical and render use each other");
+    assert!(
+        c.contains(&"physical".to_string()) && c.contains(&"render".to_string()),
+        "{c:?}"
+    );
+    // The layout of issue 38: the moment products in a module both import, and the child
+    // using a sibling, not its parent.
+    let new = [
+        (
+            "lib.rs",
+            "pub mod image;\npub mod physical;\npub mod render;\n",
+        ),
+        ("image.rs", "pub fn add_moment_products() {}\n"),
+        (
+            "physical/mod.rs",
+            "mod bsdf;\nmod light_paths;\npub(crate) use light_paths::fold;\n",
+        ),
+        (
+            "physical/bsdf.rs",
+            "pub(super) struct Surface;\n#[cfg(test)]\nmod tests {\n    use super::*;\n}\n",
+        ),
+        (
+            "physical/light_paths.rs",
+            "use super::bsdf::Surface;\nuse crate::image::add_moment_products;\npub fn fold() {}\n",
+        ),
+        (
+            "render.rs",
+            "use crate::image::add_moment_products;\nuse crate::physical::fold;\n",
+        ),
+    ];
+    let g = graph_of(&sources(&new));
+    assert_eq!(g["physical::light_paths"], set(["image", "physical::bsdf"]));
+    // `super` in an inline `mod tests` is the file's own module, not its parent.
+    assert_eq!(g["physical::bsdf"], set([]));
+    assert!(find_cycle(&g).is_none(), "{g:?}");
+    assert!(find_cycle(&top_level(&g)).is_none(), "{g:?}");
+    // `super::super`, `self::` and a `#[path]` beside a folder's `mod.rs`.
+    let g = graph_of(&sources(&[
+        ("lib.rs", "mod a;\nmod b;\n"),
+        (
+            "a/mod.rs",
+            "#[path = \"inner.rs\"]\nmod c;\nfn f() { self::c::g(); }\n",
+        ),
+        ("a/inner.rs", "fn g() { super::super::b::h(); }\n"),
+        ("b.rs", "fn h() {}\n"),
+    ]));
+    assert_eq!(g["a"], set(["a::c"]));
+    assert_eq!(g["a::c"], set(["b"]));
+}
+
+#[test]
+fn a_cycle_planted_in_the_renderer_is_caught() {
+    let clean = read_sources(&repo().join("renderer/src"));
+    assert!(find_cycle(&graph_of(&clean)).is_none());
+    for (file, planted, between) in [
+        // The light paths using the render loop again (for the moment products, as they
+        // did): render uses physical, which uses its light paths.
+        (
+            "physical/light_paths.rs",
+            "\nuse crate::render::Options;\n",
+            ["physical::light_paths", "render"],
+        ),
+        // A child using its parent's re-export: the parent uses the child's sibling,
+        // which uses the child.
+        (
+            "physical/bsdf.rs",
+            "\nfn planted(_: super::PhysicalIntegrator) {}\n",
+            ["physical::bsdf", "physical"],
+        ),
+    ] {
+        let mut s = clean.clone();
+        s.get_mut(Path::new(file))
+            .unwrap_or_else(|| panic!("no renderer/src/{file}"))
+            .push_str(planted);
+        let g = graph_of(&s);
+        let c = find_cycle(&g).unwrap_or_else(|| panic!("{file} + {planted:?}: no cycle found"));
+        for m in between {
+            assert!(c.contains(&m.to_string()), "{file} + {planted:?}: {c:?}");
+        }
     }
 }

@@ -181,7 +181,7 @@ to fail, but it passed ({} failing, {} edge pixels, budget {})",
     }
 }
 
-/// Light paths (renderer/src/light_paths.rs) take over the caustics seen directly from the
+/// Light paths (renderer/src/physical/light_paths.rs) take over the caustics seen directly from the
 /// camera paths: the two must count each path once. With them on, the mirror scene, whose
 /// caustic on the floor they are for, still agrees with Mitsuba; with the camera paths
 /// counting those caustics too (`Fault::CausticsTwice`), it fails. (The glass scene is
@@ -204,7 +204,7 @@ fn test07_light_paths_count_each_caustic_once() {
             r.passed(),
             "{name} with render.light_paths = 1: expected the radiance test to pass, but \
 {:.2} % of pixel-channels pass and the global z is {:.1?}: the light paths' estimate \
-(renderer/src/light_paths.rs, the factor of its module docs) or the camera paths' share \
+(renderer/src/physical/light_paths.rs, the factor of its module docs) or the camera paths' share \
 (`caustic` in PhysicalIntegrator::path) is wrong",
             r.pass_fraction * 100.0,
             r.global_z

@@ -7,8 +7,9 @@ pub mod adaptive;
 pub mod aggregate;
 pub mod bvh;
 pub mod camera;
-pub mod guide;
+
 pub mod hit;
+pub mod image;
 pub mod light;
 pub mod material;
 pub mod output;

@@ -2,7 +2,7 @@
 //! with optional geometry channels. Files are written to a temporary name beside the
 //! target and renamed into place, so a failure never leaves a half-written output.
 
-use crate::render::Image;
+use crate::image::Image;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 

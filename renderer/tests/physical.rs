@@ -92,7 +92,7 @@ fn test01_white_furnace() {
             assert!(n > 40, "{n} interior pixels");
             for (c, want) in [0.4, 0.3, 0.2].into_iter().enumerate() {
                 let (mean, se) = mean_and_error(&img, spp, &pixels, c);
-                // The environment is sampled by the cosine (physical.rs, env_pdf), so each
+                // The environment is sampled by the cosine (physical/integrator.rs, env_pdf), so each
                 // sample is ρ·L to rounding: the noise is then the f32 sum's rounding, at
                 // most spp ulps of the mean.
                 let rounding = want * spp as f64 * f32::EPSILON as f64;
@@ -262,7 +262,7 @@ material = "light"
                 "{integrator}, channel {c}: {mean} vs the closed form {want} (z = {z:.1}, \
                  standard error {se:.2e}); see the area-light sampling (AreaLight::sample_from \
                  and pdf_from in renderer/src/light.rs) and the MIS weights in \
-                 renderer/src/physical.rs"
+                 renderer/src/physical/integrator.rs"
             );
         }
         more(integrator, &img, 0.5 * 4.0 * factor);
@@ -365,7 +365,7 @@ color = [1, 0.5, 0.25]"#,
 /// pixel sees the environment unchanged, exactly. The refraction then crosses η = 1 while
 /// the Fresnel reflectance rounds to a tiny positive at these angles (cos θ = 0.32), so a
 /// path loop that told the reflection lobe by "η = 1" took every refraction for one and
-/// dropped what it met (the first vertex's reflection taken whole, renderer/src/physical.rs
+/// dropped what it met (the first vertex's reflection taken whole, renderer/src/physical/integrator.rs
 /// `reflected_emission`): black where the glass is.
 #[test]
 fn test06_index_matched_glass_is_invisible() {
@@ -404,7 +404,7 @@ transform = [{{ scale = 4 }}]
                 *v,
                 0.5,
                 "{integrator}: pixel {} channel {} is {v}, not the environment's 0.5: \
-                 an ior-1 dielectric must change nothing (renderer/src/physical.rs, \
+                 an ior-1 dielectric must change nothing (renderer/src/physical/integrator.rs, \
                  the path loop's reflection test)",
                 k / 3,
                 k % 3
@@ -545,7 +545,7 @@ fn light_paths_keep_the_expectation(text: &str, what: &str) {
         assert!(
             z.abs() < 5.0,
             "{what}, channel {c}: the image sums {b} with light paths and {a} without (z = {z:.1}): \
-the light paths' estimate (renderer/src/light_paths.rs, the factor in its module docs) \
+the light paths' estimate (renderer/src/physical/light_paths.rs, the factor in its module docs) \
 or the camera paths' share (`caustic` in PhysicalIntegrator::path) is wrong"
         );
         // The caustics' share, counted twice: a test that cannot see it is no test.

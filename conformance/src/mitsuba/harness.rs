@@ -106,7 +106,7 @@ pub fn read_radiance(path: &Path, spp: u32) -> Result<(Vec<f32>, Estimate)> {
 
 /// The XML whose hash a Mitsuba reference records.
 pub fn export_text(scene: &Scene, spp: u32) -> Result<String> {
-    let e = super::export(scene, spp, true)?;
+    let e = super::xml::export(scene, spp, true)?;
     let mut text = e.xml;
     for (name, obj) in e.meshes {
         text.push_str(&format!("\n<!-- {name} -->\n{obj}"));

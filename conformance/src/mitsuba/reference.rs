@@ -53,7 +53,7 @@ impl Reference for Mitsuba {
         output: &Path,
     ) -> Result<()> {
         let _ = title;
-        let e = super::export(scene, opts.spp.unwrap_or(EXPORT_SPP), opts.moment)?;
+        let e = super::xml::export(scene, opts.spp.unwrap_or(EXPORT_SPP), opts.moment)?;
         e.write(output)
             .with_context(|| format!("writing {}", output.display()))
     }

@@ -34,7 +34,7 @@ pub fn render_mitsuba(
     spp: u32,
 ) -> Result<(Record, Record)> {
     let (scene, text) = load(entry)?;
-    let export = super::export(&scene, spp, true)?;
+    let export = super::xml::export(&scene, spp, true)?;
     let hash_text = export_text(&scene, spp)?;
     let work = scratch_dir(&format!("mi-{}", entry.name))?;
     let xml = work.join(format!("{}.xml", entry.name));

@@ -84,7 +84,7 @@ pub fn read_reference(path: &std::path::Path) -> Result<(usize, usize, Vec<f32>)
 /// Checks one catalog scene against its POV-Ray reference.
 pub fn check(entry: &Entry, manifest: &Manifest) -> Result<Outcome> {
     let (scene, text) = load(entry)?;
-    let sdl = super::export(&scene, &entry.name);
+    let sdl = super::sdl::export(&scene, &entry.name);
     let key = format!("povray/{}", entry.name);
     let fresh = freshness(
         manifest.reference.get(&key),

@@ -48,7 +48,7 @@ impl Reference for PovRay {
             opts.spp.is_none() && !opts.moment,
             "--spp and --moment do not apply to POV-Ray (a pixel-centre render)"
         );
-        std::fs::write(output, super::export(scene, title))
+        std::fs::write(output, super::sdl::export(scene, title))
             .with_context(|| format!("writing {}", output.display()))
     }
 

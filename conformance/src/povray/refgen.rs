@@ -42,7 +42,7 @@ pub fn povray_args(name: &str, width: u32, height: u32) -> Vec<String> {
 /// Renders one scene with POV-Ray into `out_dir/<name>.exr` and returns its record.
 pub fn render_povray(entry: &Entry, out_dir: &Path, version: &str) -> Result<Record> {
     let (scene, text) = load(entry)?;
-    let sdl = super::export(&scene, &entry.name);
+    let sdl = super::sdl::export(&scene, &entry.name);
     let work = scratch_dir(&entry.name)?;
     std::fs::write(work.join(format!("{}.pov", entry.name)), &sdl)?;
     let args = povray_args(&entry.name, scene.settings.width, scene.settings.height);

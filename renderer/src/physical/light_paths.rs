@@ -1,5 +1,4 @@
-//! Light paths for the caustics seen directly (a child module of physical.rs, whose
-//! private types it uses).
+//! Light paths for the caustics seen directly.
 //!
 //! A camera path that meets a diffuse surface first and then one or more mirror or glass
 //! surfaces before it hits an area light (camera → D → S⁺ → light) finds that light only
@@ -40,9 +39,13 @@
 //! contributions kept in order in its own buffer, and the buffers added to the image in
 //! chunk order.
 
-use super::*;
-use crate::guide::SHARE;
-use crate::render::{add_moment_products, MOMENT_PAIRS};
+use super::bsdf::{dv, rgb, rv};
+use super::guide::{specular_balls, AtVertex, Ball, Pick, MAX_GUIDES, SHARE};
+use super::vertex::Tracer;
+use crate::image::{add_moment_products, MOMENT_PAIRS};
+use crate::real::Real;
+use crate::sampler::PixelSampler;
+use crate::scene::{Integrator, MaterialModel, Scene};
 use rayon::prelude::*;
 
 /// Light paths a chunk traces (one rayon job).
@@ -153,15 +156,14 @@ impl LightPaths {
     }
 }
 
-impl PhysicalIntegrator<'_> {
-    /// Traces the render's light paths (none when they are off): `spp` camera samples a
-    /// pixel; `moments`: also the sums of the contributions' products.
-    pub(crate) fn light_image(&self, spp: u32, moments: bool) -> Option<LightImage> {
-        let lp = self.light.as_ref()?;
-        let px = lp.cols as usize * lp.rows as usize;
+impl LightPaths {
+    /// Traces the render's light paths with `t`: `spp` camera samples a pixel;
+    /// `moments`: also the sums of the contributions' products.
+    pub(super) fn image(&self, t: Tracer<'_>, spp: u32, moments: bool) -> LightImage {
+        let px = self.cols as usize * self.rows as usize;
         // At most 2³¹ (a sample index and count of the samplers' u32, whose square root
         // the stratified sampler squares).
-        let paths = (lp.ratio * px as f64 * spp as f64)
+        let paths = (self.ratio * px as f64 * spp as f64)
             .round()
             .clamp(1.0, MAX_PATHS as f64) as u64;
         let mut sum = vec![0.0; px * 3];
@@ -181,12 +183,12 @@ impl PhysicalIntegrator<'_> {
                     let start = (first + c as u64) * CHUNK;
                     for k in start..(start + CHUNK).min(paths) {
                         let mut smp = PixelSampler::new(
-                            self.scene.settings.sampler,
+                            t.scene.settings.sampler,
                             LIGHT_KEY,
                             k as u32,
                             paths as u32,
                         );
-                        if let Some(hit) = self.light_path(lp, &mut smp) {
+                        if let Some(hit) = self.light_path(t, &mut smp) {
                             buf.push(hit);
                         }
                     }
@@ -207,17 +209,17 @@ impl PhysicalIntegrator<'_> {
             }
             first += n as u64;
         }
-        Some(LightImage {
+        LightImage {
             sum,
             sq,
             paths,
             non_finite,
-        })
+        }
     }
 
     /// One light path: the pixel it adds to and what it adds (times the path count).
-    fn light_path(&self, lp: &LightPaths, smp: &mut PixelSampler) -> Option<(usize, glam::DVec3)> {
-        let lights = &self.scene.area_lights;
+    fn light_path(&self, t: Tracer<'_>, smp: &mut PixelSampler) -> Option<(usize, glam::DVec3)> {
+        let lights = &t.scene.area_lights;
         let light = if lights.len() == 1 {
             &lights[0]
         } else {
@@ -228,7 +230,7 @@ impl PhysicalIntegrator<'_> {
         let ny = dv(n_world).normalize();
         let pdf_area = light.pdf_area(n_world) as f64;
         let y = dv(y);
-        let cones = AtVertex::new(&lp.balls, y, ny);
+        let cones = AtVertex::new(&self.balls, y, ny);
         let u = smp.next_2d();
         if !cones.active() {
             return None;
@@ -243,31 +245,31 @@ impl PhysicalIntegrator<'_> {
             return None;
         }
         let mut beta = rgb(light.radiance) * (cos_y * lights.len() as f64 / (pdf_area * pdf_dir));
-        let (mut ray, mut t_min) = self.spawn.ray(rv(y), err, rv(ny), rv(dir));
+        let (mut ray, mut t_min) = t.spawn.ray(rv(y), err, rv(ny), rv(dir));
         let mut specular = 0;
         loop {
-            let hit = self
+            let hit = t
                 .scene
                 .root
                 .intersect_for_shading(&ray, t_min, Real::INFINITY)?;
-            let s = self.surface(&hit);
+            let s = t.surface(&hit);
             let w_in = -dv(ray.d).normalize();
             if !s.is_delta() {
                 // Straight from the light: next-event estimation's, not ours.
                 if specular == 0 {
                     return None;
                 }
-                let (pixel, we, w_eye, dist) = lp.project(dv(s.p))?;
+                let (pixel, we, w_eye, dist) = self.project(dv(s.p))?;
                 let (f, _) = s.eval_diffuse(w_eye, w_in);
                 let cos_in = s.ng.dot(w_in).abs();
-                if f == glam::DVec3::ZERO || !(cos_in > 0.0) || self.occluded(&s, w_eye, dist) {
+                if f == glam::DVec3::ZERO || !(cos_in > 0.0) || t.occluded(&s, w_eye, dist) {
                     return None;
                 }
                 // Non-finite contributions are counted where they are added.
                 return Some((pixel, beta * f * (s.ng.dot(w_eye).abs() / cos_in * we)));
             }
             specular += 1;
-            if specular > lp.max_specular {
+            if specular > self.max_specular {
                 return None;
             }
             let bs = s.sample(w_in, smp)?;
@@ -280,17 +282,8 @@ impl PhysicalIntegrator<'_> {
             if beta == glam::DVec3::ZERO {
                 return None;
             }
-            (ray, t_min) = self.spawn.ray(s.p, s.err, rv(s.ng), rv(bs.dir));
+            (ray, t_min) = t.spawn.ray(s.p, s.err, rv(s.ng), rv(bs.dir));
         }
-    }
-
-    /// Whether the emitter at `s` is an area light (what the light paths start from).
-    #[inline]
-    pub(super) fn is_area_light(&self, s: &Surface) -> bool {
-        self.scene
-            .area_light_of
-            .get(s.object_id as usize)
-            .is_some_and(|&k| k != u32::MAX)
     }
 }
 

@@ -1,32 +1,19 @@
-//! The physically based model: radiometric, in linear RGB, following Mitsuba 3's
-//! definitions so that the same numbers mean the same image
-//! (renderer/docs/physical.md cites the Mitsuba source for each).
-//!
-//! - BSDFs: Lambertian `diffuse` (reflectance/π, two-sided), smooth `conductor` (a perfect
-//!   mirror scaled by its specular reflectance), smooth `dielectric` (Fresnel reflection
-//!   and refraction, interior ior over exterior 1).
-//! - Lights: `point` (intensity, W/sr), `directional` (irradiance), area lights (emissive
-//!   spheres and rectangles, radiance on the side of their normal), and a constant
-//!   `environment` (radiance).
-//! - Integrators: `direct` (emitters seen directly or through one BSDF sample, plus light
-//!   sampling at the first hit, combined by multiple importance sampling) and `path`
-//!   (unidirectional path tracing with next-event estimation, MIS, `max_depth` and Russian
-//!   roulette from `rr_depth`).
+//! The `direct` and `path` integrators (Mitsuba 3's), MIS weights and the environment's
+//! density, and the specular guides' spheres; the module docs of `physical` say what they
+//! compute.
 
-use crate::guide::{AtVertex, Ball, Pick, MAX_GUIDES};
+use super::bsdf::{cosine_dir, dv, mirror, rgb, rv, BsdfSample, Surface};
+use super::guide::{specular_balls, AtVertex, Ball, Pick, MAX_GUIDES};
+use super::light_paths::{LightImage, LightPaths};
+use super::vertex::Tracer;
 use crate::hit::Hit;
-use crate::light::frame;
 use crate::ray::Ray;
-use crate::real::{Real, Vec3};
-use crate::sampler::{cos_sin_turn, PixelSampler};
+use crate::real::Real;
+use crate::sampler::PixelSampler;
 use crate::scene::settings::LightSampling;
-use crate::scene::{Color, Integrator, LightKind, Material, MaterialModel, Scene};
+use crate::scene::{Color, Integrator, LightKind, MaterialModel, Scene};
 use crate::spawn::Spawn;
 use std::f64::consts::PI;
-
-#[path = "light_paths.rs"]
-mod light_paths;
-pub(crate) use light_paths::fold as fold_light_image;
 
 /// A deliberate error, injected only by tests that show the conformance gate catches it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,20 +23,6 @@ pub enum Fault {
     /// The camera paths count the caustics seen directly although light paths count them
     /// too (light_paths.rs).
     CausticsTwice,
-}
-
-/// Unpolarized Fresnel reflectance of a smooth dielectric for `cos_i` (> 0 on the side the
-/// light comes from) and relative ior `eta` = η_transmitted / η_incident. Returns
-/// (F, cos_t); F = 1 on total internal reflection.
-fn fresnel(cos_i: f64, eta: f64) -> (f64, f64) {
-    let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return (1.0, 0.0);
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    (0.5 * (rs * rs + rp * rp), cos_t)
 }
 
 /// The environment's light-sampling density of `dir` at a vertex whose facing normal is
@@ -73,159 +46,6 @@ fn mis(a: f64, b: f64) -> f64 {
         a2 / (a2 + b2)
     } else {
         0.0
-    }
-}
-
-fn dv(v: Vec3) -> glam::DVec3 {
-    crate::real::dvec3(v)
-}
-
-fn rv(v: glam::DVec3) -> Vec3 {
-    crate::real::vec3(v)
-}
-
-fn rgb(c: Color) -> glam::DVec3 {
-    glam::DVec3::new(c.x as f64, c.y as f64, c.z as f64)
-}
-
-/// A sampled BSDF direction.
-struct BsdfSample {
-    dir: glam::DVec3,
-    /// f·|cos|/pdf (or the delta weight).
-    weight: glam::DVec3,
-    /// Solid-angle density; 0 for delta lobes.
-    pdf: f64,
-    /// Relative ior crossed (η_t/η_i) for refraction, else 1 (for Russian roulette).
-    eta: f64,
-    /// A dielectric's reflection lobe (which `eta == 1` does not tell: an ior of 1, the
-    /// default, refracts with η = 1 and a reflectance F that rounds to a tiny positive).
-    reflected: bool,
-}
-
-/// The mirror direction of `wo` about unit `n`, given `cos_i = n·wo`: the sampled
-/// reflection of the conductor and the dielectric, and the ray `reflected_emission`
-/// traces (the same bits, so it meets what the sampled reflection meets).
-#[inline(always)]
-fn mirror(n: glam::DVec3, cos_i: f64, wo: glam::DVec3) -> glam::DVec3 {
-    n * (2.0 * cos_i) - wo
-}
-
-/// A cosine-weighted direction about unit `n` from the 2D sample `u`.
-#[inline(always)]
-fn cosine_dir(n: glam::DVec3, (u1, u2): (f64, f64)) -> glam::DVec3 {
-    let r = u1.sqrt();
-    let (cos_phi, sin_phi) = cos_sin_turn(u2);
-    let (t, b) = frame(n);
-    let local_z = (1.0 - u1).max(0.0).sqrt();
-    t * (r * cos_phi) + b * (r * sin_phi) + n * local_z
-}
-
-/// The surface at a hit, oriented for shading.
-struct Surface<'a> {
-    p: Vec3,
-    err: Vec3,
-    /// Unit geometric normal, outward.
-    ng: glam::DVec3,
-    /// Unit shading normal, outward.
-    ns: glam::DVec3,
-    m: &'a Material,
-    object_id: u32,
-    n_world: Vec3,
-}
-
-impl Surface<'_> {
-    /// The unit shading normal on the side of `wo` (the BSDFs are two-sided).
-    #[inline(always)]
-    fn facing(&self, wo: glam::DVec3) -> glam::DVec3 {
-        let side = if self.ns.dot(wo) >= 0.0 { 1.0 } else { -1.0 };
-        self.ns * side
-    }
-
-    fn is_delta(&self) -> bool {
-        self.m.model != MaterialModel::Diffuse
-    }
-
-    /// Lambertian f·cos for incoming `wo` (towards the viewer) and `wi` (towards the
-    /// light): zero unless both are on the same side of the surface (two-sided).
-    fn eval_diffuse(&self, wo: glam::DVec3, wi: glam::DVec3) -> (glam::DVec3, f64) {
-        let (co, ci) = (self.ns.dot(wo), self.ns.dot(wi));
-        if co * ci <= 0.0 || self.ng.dot(wo) * self.ng.dot(wi) <= 0.0 {
-            return (glam::DVec3::ZERO, 0.0);
-        }
-        let cos = ci.abs();
-        (rgb(self.m.color) * (cos / PI), cos / PI)
-    }
-
-    /// A dielectric's Fresnel split for the viewer at `wo`, `n` the shading normal on its
-    /// side: cos θ_i, the relative ior crossed (η_t/η_i), the reflectance F and cos θ_t.
-    #[inline(always)]
-    fn dielectric(&self, n: glam::DVec3, wo: glam::DVec3) -> (f64, f64, f64, f64) {
-        let cos_i = n.dot(wo);
-        // Outside when the viewer is on the outward side of the geometry.
-        let outside = self.ng.dot(wo) > 0.0;
-        let eta = if outside {
-            self.m.ior as f64
-        } else {
-            1.0 / self.m.ior as f64
-        };
-        let (f, cos_t) = fresnel(cos_i, eta);
-        (cos_i, eta, f, cos_t)
-    }
-
-    #[inline(always)]
-    fn sample(&self, wo: glam::DVec3, s: &mut PixelSampler) -> Option<BsdfSample> {
-        let n = self.facing(wo);
-        match self.m.model {
-            MaterialModel::Diffuse => {
-                let dir = cosine_dir(n, s.next_2d());
-                let (f, pdf) = self.eval_diffuse(wo, dir);
-                if pdf <= 0.0 {
-                    return None;
-                }
-                Some(BsdfSample {
-                    dir,
-                    weight: f / pdf,
-                    pdf,
-                    eta: 1.0,
-                    reflected: false,
-                })
-            }
-            MaterialModel::Conductor => {
-                s.next_1d();
-                Some(BsdfSample {
-                    dir: mirror(n, n.dot(wo), wo),
-                    weight: rgb(self.m.color),
-                    pdf: 0.0,
-                    eta: 1.0,
-                    reflected: false,
-                })
-            }
-            MaterialModel::Dielectric => {
-                let u = s.next_1d();
-                let (cos_i, eta, f, cos_t) = self.dielectric(n, wo);
-                if u < f {
-                    Some(BsdfSample {
-                        dir: mirror(n, cos_i, wo),
-                        weight: glam::DVec3::ONE,
-                        pdf: 0.0,
-                        eta: 1.0,
-                        reflected: true,
-                    })
-                } else {
-                    let dir = -wo / eta + n * (cos_i / eta - cos_t);
-                    // Radiance is compressed into a smaller solid angle when entering a
-                    // denser medium: the transmitted weight is 1/η².
-                    Some(BsdfSample {
-                        dir,
-                        weight: glam::DVec3::splat(1.0 / (eta * eta)),
-                        pdf: 0.0,
-                        eta,
-                        reflected: false,
-                    })
-                }
-            }
-            MaterialModel::Classic => None,
-        }
     }
 }
 
@@ -258,7 +78,7 @@ pub struct PhysicalIntegrator<'a> {
     /// gain.
     glass: bool,
     /// The light paths for the caustics seen directly, when on (light_paths.rs).
-    light: Option<light_paths::LightPaths>,
+    light: Option<LightPaths>,
     /// The chance that next-event estimation picks a given light: 1 when it takes every
     /// light (`render.light_sampling = "all"`, or a single light), else 1 / their number.
     select: f64,
@@ -288,7 +108,7 @@ impl<'a> PhysicalIntegrator<'a> {
             } else {
                 Vec::new()
             },
-            light: light_paths::LightPaths::new(scene),
+            light: LightPaths::new(scene),
             select: match scene.settings.light_sampling {
                 LightSampling::One => {
                     1.0 / (scene.lights.len() + scene.area_lights.len()).max(1) as f64
@@ -327,25 +147,35 @@ impl<'a> PhysicalIntegrator<'a> {
         })
     }
 
+    /// What both path directions ask of the scene at a vertex (vertex.rs).
+    #[inline(always)]
+    fn tracer(&self) -> Tracer<'a> {
+        Tracer {
+            scene: self.scene,
+            spawn: self.spawn,
+        }
+    }
+
     #[inline(always)]
     fn surface(&self, hit: &Hit) -> Surface<'a> {
-        let ng = dv(hit.n_geo).normalize();
-        let ns = if hit.flat_shaded() {
-            ng
-        } else {
-            Some(dv(hit.n_shade).normalize())
-                .filter(|ns| ns.is_finite())
-                .unwrap_or(ng)
-        };
-        Surface {
-            p: hit.p,
-            err: hit.err,
-            ng,
-            ns,
-            m: self.scene.material(hit.material),
-            object_id: hit.object_id,
-            n_world: hit.n_geo,
-        }
+        self.tracer().surface(hit)
+    }
+
+    #[inline(always)]
+    fn occluded(&self, s: &Surface, dir: glam::DVec3, dist: f64) -> bool {
+        self.tracer().occluded(s, dir, dist)
+    }
+
+    #[inline]
+    fn is_area_light(&self, s: &Surface) -> bool {
+        self.tracer().is_area_light(s)
+    }
+
+    /// Traces the render's light paths (none when they are off): `spp` camera samples a
+    /// pixel; `moments`: also the sums of the contributions' products (light_paths.rs).
+    pub(crate) fn light_image(&self, spp: u32, moments: bool) -> Option<LightImage> {
+        let lp = self.light.as_ref()?;
+        Some(lp.image(self.tracer(), spp, moments))
     }
 
     /// Radiance emitted by the surface towards `wo` (area lights emit on the normal side).
@@ -368,16 +198,6 @@ impl<'a> PhysicalIntegrator<'a> {
         }
         let light = &self.scene.area_lights[k as usize];
         light.pdf_from(from, dir, dist, s.n_world) * self.select
-    }
-
-    fn occluded(&self, s: &Surface, dir: glam::DVec3, dist: f64) -> bool {
-        let (ray, t_min) = self.spawn.ray(s.p, s.err, rv(s.ng), rv(dir));
-        let limit = if dist.is_finite() {
-            (dist * (1.0 - 1e-4)) as Real
-        } else {
-            Real::INFINITY
-        };
-        self.scene.root.occluded(&ray, t_min, limit)
     }
 
     /// The diffuse BSDF times cosine for light sampling (with the test-only fault applied).
@@ -719,47 +539,4 @@ fn guide_balls(scene: &Scene) -> Vec<Ball> {
         balls.clear();
     }
     balls
-}
-
-/// The spheres around the top-level specular objects, and whether every specular surface
-/// of the scene lies in one and reflects about its geometric normal, as light paths need
-/// (light_paths.rs): not when a specular object is unbounded (a mirror plane), when a
-/// definition placed by `type = "instance"` may hold one, nor when a specular triangle or
-/// mesh may have interpolated normals (a light path would need the shading normal's
-/// correction at it).
-fn specular_balls(scene: &Scene) -> (Vec<Ball>, bool) {
-    use crate::aggregate::Shape;
-    let mut balls = Vec::new();
-    let mut complete = true;
-    for inst in scene.root.in_scene_order() {
-        if matches!(inst.shape, Shape::Group(_)) {
-            complete = false;
-        }
-        let m = scene.material(inst.material);
-        if !matches!(
-            m.model,
-            MaterialModel::Conductor | MaterialModel::Dielectric
-        ) {
-            continue;
-        }
-        if matches!(inst.shape, Shape::Mesh(_) | Shape::Triangle(_)) {
-            complete = false;
-        }
-        let ball = crate::light::sphere_ball(inst)
-            .map(|(centre, radius)| Ball { centre, radius })
-            .or_else(|| {
-                let b = inst.bounds();
-                let (lo, hi) = (dv(b.min), dv(b.max));
-                (lo.is_finite() && hi.is_finite()).then(|| Ball {
-                    centre: (lo + hi) * 0.5,
-                    radius: (hi - lo).length() * 0.5,
-                })
-            });
-        match ball {
-            Some(b) if b.radius > 0.0 && b.radius.is_finite() => balls.push(b),
-            // An unbounded specular object (a mirror plane): no cone to aim at.
-            _ => complete = false,
-        }
-    }
-    (balls, complete)
 }

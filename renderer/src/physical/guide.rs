@@ -26,7 +26,10 @@
 //! world bounding box. A scene with more than [`MAX_GUIDES`] such objects gets none (the
 //! density sums over all of them at every vertex).
 
+use crate::aggregate::Shape;
 use crate::light::subtended;
+use crate::real::dvec3;
+use crate::scene::{MaterialModel, Scene};
 use glam::DVec3;
 use std::f64::consts::PI;
 
@@ -139,6 +142,48 @@ impl AtVertex {
         }
         (1.0 - SHARE) * cos_pdf + SHARE / self.n as f64 * cones
     }
+}
+
+/// The spheres around the top-level specular objects, and whether every specular surface
+/// of the scene lies in one and reflects about its geometric normal, as light paths need
+/// (light_paths.rs): not when a specular object is unbounded (a mirror plane), when a
+/// definition placed by `type = "instance"` may hold one, nor when a specular triangle or
+/// mesh may have interpolated normals (a light path would need the shading normal's
+/// correction at it).
+pub(super) fn specular_balls(scene: &Scene) -> (Vec<Ball>, bool) {
+    let mut balls = Vec::new();
+    let mut complete = true;
+    for inst in scene.root.in_scene_order() {
+        if matches!(inst.shape, Shape::Group(_)) {
+            complete = false;
+        }
+        let m = scene.material(inst.material);
+        if !matches!(
+            m.model,
+            MaterialModel::Conductor | MaterialModel::Dielectric
+        ) {
+            continue;
+        }
+        if matches!(inst.shape, Shape::Mesh(_) | Shape::Triangle(_)) {
+            complete = false;
+        }
+        let ball = crate::light::sphere_ball(inst)
+            .map(|(centre, radius)| Ball { centre, radius })
+            .or_else(|| {
+                let b = inst.bounds();
+                let (lo, hi) = (dvec3(b.min), dvec3(b.max));
+                (lo.is_finite() && hi.is_finite()).then(|| Ball {
+                    centre: (lo + hi) * 0.5,
+                    radius: (hi - lo).length() * 0.5,
+                })
+            });
+        match ball {
+            Some(b) if b.radius > 0.0 && b.radius.is_finite() => balls.push(b),
+            // An unbounded specular object (a mirror plane): no cone to aim at.
+            _ => complete = false,
+        }
+    }
+    (balls, complete)
 }
 
 #[cfg(test)]
