@@ -3,8 +3,8 @@
 //! scene and the vote adds the two comparisons it owns.
 
 use super::outcome::Outcome;
+use super::render::Oracle;
 use super::vote::Vote;
-use super::Oracle;
 use crate::catalog::{load, Entry};
 use crate::manifest::Manifest;
 use crate::verdict::Verdict;

@@ -3,7 +3,7 @@
 //! regenerate or commit.
 
 use super::outcome::CHECKS;
-use super::Oracle;
+use super::render::Oracle;
 use crate::catalog::{load, Entry};
 use crate::checked::Checked;
 use crate::manifest::Manifest;

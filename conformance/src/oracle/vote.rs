@@ -11,7 +11,7 @@
 //!
 //! conformance/docs/oracle.md derives why the same `tol` serves all three.
 
-use super::Oracle;
+use super::render::Oracle;
 use crate::catalog::{load, Entry};
 use crate::povray::compare::{compare, error_in_tolerances, Comparison};
 use crate::povray::harness::{compare_render, read_reference, render_for_conformance};
