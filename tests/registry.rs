@@ -151,7 +151,7 @@ fn manifest() -> Manifest {
 #[test]
 fn test01_a_registered_reference_selects_the_scenes_it_covers() {
     let r = registry();
-    assert_eq!(r.names(), ["povray", "mitsuba", "fake"]);
+    assert_eq!(r.names(), ["povray", "mitsuba", "oracle", "fake"]);
     let mine = r.select("fake::").unwrap();
     assert!(!mine.is_empty());
     assert!(
@@ -166,7 +166,7 @@ fn test01_a_registered_reference_selects_the_scenes_it_covers() {
         .iter()
         .map(|(x, _)| x.name())
         .collect();
-    assert_eq!(both, ["povray", "fake"]);
+    assert_eq!(both, ["povray", "oracle", "fake"]);
     // The committed registry knows no fake, and a name is registered once.
     assert!(Registry::committed().select("fake::").is_err());
     assert!(r.with(&FAKE).is_err(), "two references named fake");
@@ -184,14 +184,18 @@ fn test02_the_gate_judges_it_and_sees_the_references_disagree() {
         got,
         [
             ("povray".to_string(), Verdict::Pass),
+            ("oracle".to_string(), Verdict::Pass),
             ("fake".to_string(), Verdict::Fail)
         ]
     );
     let scenes = by_scene(&judged);
     assert_eq!(scenes.len(), 1, "{scenes:?}");
-    assert_eq!(scenes[0].disagreements(), [("povray", "fake")]);
+    assert_eq!(
+        scenes[0].disagreements(),
+        [("povray", "fake"), ("oracle", "fake")]
+    );
     let dir = std::env::temp_dir().join(format!("registry-fail-{}", std::process::id()));
-    let m = judged[1].failure_message_to(&dir);
+    let m = judged[2].failure_message_to(&dir);
     assert!(m.starts_with("fake/prim_sphere_identity: FAIL\n"), "{m}");
     assert!(m.contains("fake metric") && m.contains("fake class"), "{m}");
     assert!(m.contains("#prim_sphere_identity@fake"), "{m}");
@@ -215,7 +219,7 @@ fn test03_waivers_take_its_checks() {
     assert!(e.contains("unknown reference `fake`"), "{e}");
     // Its failure, waived, is WAIVED; POV-Ray's pass stays a pass.
     let judged = check_all(&r, SCENE, &manifest(), &w).unwrap();
-    assert_eq!(judged[1].verdict, Verdict::Waived);
+    assert_eq!(judged[2].verdict, Verdict::Waived);
     assert_eq!(judged[0].verdict, Verdict::Pass);
     let (_, e) = r.select("fake::prim_sphere_identity").unwrap().remove(0);
     let again = judge(FAKE.compare(&e, &manifest()).unwrap(), &w);
@@ -237,6 +241,8 @@ fn test04_the_report_shows_it() {
         "<tr id=\"prim_sphere_identity\"",
         "prim_sphere_identity@fake/fakefig.png",
         "povray and fake disagree",
+        // The oracle's three-way vote on the scene, in its agreement cell.
+        "three-way: ours~POV-Ray agree, oracle~POV-Ray agree, ours~oracle agree",
     ] {
         assert!(html.contains(want), "the report lacks {want:?}");
     }

@@ -49,6 +49,13 @@ pub trait Checked: Send + Sync {
     /// reference).
     fn worst_score(&self) -> f64;
 
+    /// Who agrees with whom, for a reference that compares more than two images (the
+    /// oracle's three-way vote): one line the report adds to the scene's agreement
+    /// (`None` by default).
+    fn agreement(&self) -> Option<String> {
+        None
+    }
+
     /// The image that shows where the comparison failed (a difference or a z image), for
     /// the failure output and the report's third column; `None` without a reference.
     fn figure(&self) -> Option<Figure>;

@@ -11,6 +11,7 @@ pub mod gate;
 pub mod images;
 pub mod manifest;
 pub mod mitsuba;
+pub mod oracle;
 pub mod povray;
 pub mod reference;
 pub mod registry;

@@ -178,8 +178,15 @@ fn several(html: &mut String, judged: &[Judged], registry: &Registry) -> Result<
             }
         }
         let d = s.disagreements();
+        // What a reference comparing more than two images says of the scene.
+        let votes: String = judged
+            .iter()
+            .filter(|j| j.checked.catalog() == s.catalog && j.checked.scene() == s.scene)
+            .filter_map(|j| j.checked.agreement())
+            .map(|a| format!("<br>{}", html_escape(&a)))
+            .collect();
         if d.is_empty() {
-            html.push_str("<td>agree</td></tr>\n");
+            writeln!(html, "<td>agree{votes}</td></tr>")?;
         } else {
             let pairs: Vec<String> = d
                 .iter()
@@ -187,7 +194,7 @@ fn several(html: &mut String, judged: &[Judged], registry: &Registry) -> Result<
                 .collect();
             writeln!(
                 html,
-                "<td class=\"fail\">{}</td></tr>",
+                "<td class=\"fail\">{}{votes}</td></tr>",
                 html_escape(&pairs.join("; "))
             )?;
         }
