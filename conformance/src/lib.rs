@@ -4,6 +4,7 @@
 //! `mitsuba/`), so a third reference is one more folder.
 
 pub mod catalog;
+pub mod cycles;
 pub mod gate;
 pub mod images;
 pub mod manifest;

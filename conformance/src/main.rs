@@ -86,6 +86,16 @@ enum Cmd {
         #[arg(long)]
         check: bool,
     },
+    /// Regenerate Blender Cycles references (needs `bpy`; see scripts/regen-cycles.sh).
+    RegenCycles {
+        /// Which scenes of the physical catalog, as for `run`.
+        #[arg(default_value = "")]
+        filter: String,
+        /// Re-render from scratch into a temporary folder and check the result against the
+        /// committed references, instead of replacing them.
+        #[arg(long)]
+        check: bool,
+    },
     /// Regenerate POV-Ray references (needs povray; see scripts/regen-povray.sh).
     RegenPovray {
         /// Which scenes, as for `run`.
@@ -213,6 +223,22 @@ fn run() -> Result<ExitCode> {
                 }
             } else {
                 conformance::mitsuba::refgen::regenerate(&entries, spp)?;
+                Ok(ExitCode::SUCCESS)
+            }
+        }
+        Cmd::RegenCycles { filter, check } => {
+            let entries = select("mitsuba", &filter)?;
+            if check {
+                let bad = conformance::cycles::refgen::check(&entries)?;
+                if bad.is_empty() {
+                    println!("{} Cycles reference(s) regenerated from scratch and consistent with the committed files", entries.len());
+                    Ok(ExitCode::SUCCESS)
+                } else {
+                    println!("regenerated Cycles references differ: {}", bad.join(", "));
+                    Ok(ExitCode::from(1))
+                }
+            } else {
+                conformance::cycles::refgen::regenerate(&entries)?;
                 Ok(ExitCode::SUCCESS)
             }
         }
