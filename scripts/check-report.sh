@@ -55,8 +55,9 @@ elif attrs.get("broken-images") != "0":
 if 'id="summary"' not in dom:
     problems.append("no summary (id=\"summary\")")
 for row in results["rows"]:
-    if f'<tr id="{row["scene"]}"' not in dom:
-        problems.append(f'no anchor for {row["reference"]}/{row["scene"]} (index.html#{row["scene"]})')
+    anchor = row.get("anchor") or row["scene"]
+    if f'<tr id="{anchor}"' not in dom:
+        problems.append(f'no anchor for {row["reference"]}/{row["scene"]} (index.html#{anchor})')
 if problems:
     print("report check FAILED:\n  " + "\n  ".join(problems))
     sys.exit(1)
@@ -72,10 +73,10 @@ if [ -n "$self_test" ]; then
     copy="$(mktemp -d)"
     trap 'rm -rf "$copy"' EXIT
     cp -r "$report/." "$copy/"
-    rm "$(find "$copy" -name diff.png -o -name z.png | head -1)"
+    rm "$(find "$copy" -name difference.png -o -name z.png | head -1)"
     if check "$copy" >/dev/null; then echo "self-test FAILED: a missing image passed" >&2; exit 1; fi
     cp -r "$report/." "$copy/"
-    first="$(python3 -c 'import json,sys;print(json.load(open(sys.argv[1]))["rows"][0]["scene"])' "$copy/results.json")"
+    first="$(python3 -c 'import json,sys;r=json.load(open(sys.argv[1]))["rows"][0];print(r.get("anchor") or r["scene"])' "$copy/results.json")"
     sed -i "s/<tr id=\"$first\"/<tr/" "$copy/index.html"
     if check "$copy" >/dev/null; then echo "self-test FAILED: a missing anchor passed" >&2; exit 1; fi
     echo "self-test: a missing image and a missing anchor each fail the check"

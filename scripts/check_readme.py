@@ -52,7 +52,7 @@ def plan(cmd, scratch):
         "[--spp N]": "",
         "--spp N": "--spp 4",
     }
-    if "export-mitsuba" in cmd:
+    if "export mitsuba" in cmd:
         # Mitsuba exports need a scene of the physical model.
         subst["SCENE.toml"] = "conformance/scenes/mitsuba/mi_diffuse_point.toml"
     for k, v in subst.items():
@@ -70,7 +70,7 @@ def plan(cmd, scratch):
             return argv[: sep + 1] + args + ["--size", "16x12", "--spp", "1"]
         if pkg == "conformance" and args[:1] == ["new-scene"]:
             return argv[: sep + 1] + ["new-scene", "--help"]
-        if pkg == "conformance" and args[:1] in (["run"], ["export-pov"], ["export-mitsuba"]):
+        if pkg == "conformance" and args[:1] in (["run"], ["export"]):
             return argv
         return None
     if argv[:2] == ["cargo", "test"]:

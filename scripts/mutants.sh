@@ -37,7 +37,7 @@ FILES=(
     -f 'renderer/src/shading.rs'
     -f 'renderer/src/physical.rs'
     -f 'conformance/src/povray/compare.rs'
-    -f 'conformance/src/mitsuba/stats.rs'
+    -f 'conformance/src/mitsuba/compare.rs'
 )
 
 if [ "${1:-}" = "--list" ]; then

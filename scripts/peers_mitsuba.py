@@ -187,7 +187,7 @@ def mitsuba(outdir, quick):
         toml = os.path.join(d, name + ".toml")
         open(toml, "w").write(text)
         xml = os.path.join(d, name + ".xml")
-        subprocess.run([CONFORMANCE, "export-mitsuba", toml, "-o", xml, "--spp", "16"], check=True)
+        subprocess.run([CONFORMANCE, "export", "mitsuba", toml, "-o", xml, "--spp", "16"], check=True)
         base_xml = open(xml).read()
         loaded = {}
 

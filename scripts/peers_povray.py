@@ -73,7 +73,7 @@ def povray(outdir, quick):
             name = f"n{n}_{refl}"
             toml = os.path.join(d, name + ".toml")
             open(toml, "w").write(whitted_scene(n, refl, w, h))
-            subprocess.run([CONFORMANCE, "export-pov", toml, "-o", os.path.join(d, name + ".pov")], check=True)
+            subprocess.run([CONFORMANCE, "export", "povray", toml, "-o", os.path.join(d, name + ".pov")], check=True)
             ow, oc, pw, pc, tr, cr = [], [], [], [], [], []
             for _ in range(pairs):
                 a = run_timed([RENDERER, "render", toml, "-o", os.path.join(d, name + "_ours.png"), "--threads", "2"])

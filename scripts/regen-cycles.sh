@@ -31,4 +31,4 @@ export CYCLES_PYTHON="$PWD/$venv/bin/python"
 
 check=""
 if [ "${1:-}" = "--check" ]; then check="--check"; shift; fi
-cargo run -q -p conformance -- regen-cycles $check "$@"
+cargo run -q -p conformance -- regen cycles $check "$@"

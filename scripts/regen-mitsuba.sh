@@ -25,4 +25,4 @@ fi
 check=""
 if [ "${1:-}" = "--check" ]; then check="--check"; shift; fi
 # The dev profile is optimized (Cargo.toml), and shares its build with `cargo test`.
-cargo run -q -p conformance -- regen-mitsuba $check "$@"
+cargo run -q -p conformance -- regen mitsuba $check "$@"

@@ -25,4 +25,4 @@ mkdir -p "$HOME/.povray/3.7" && touch "$HOME/.povray/3.7/povray.conf"
 check=""
 if [ "${1:-}" = "--check" ]; then check="--check"; shift; fi
 # The dev profile is optimized (Cargo.toml), and shares its build with `cargo test`.
-cargo run -q -p conformance -- regen-povray $check "${1:-}"
+cargo run -q -p conformance -- regen povray $check "${1:-}"

@@ -6,8 +6,8 @@
 //! conformance/docs/tolerances.md.
 
 use conformance::catalog::{load, repo_root, scenes, Entry};
+use conformance::mitsuba::compare::{geometry_test, GeometryTest};
 use conformance::mitsuba::harness::{our_geometry, read_geometry};
-use conformance::mitsuba::stats::{geometry_test, GeometryTest};
 use conformance::povray::compare::Comparison;
 use conformance::povray::harness::{compare_render, read_reference, retrace};
 use glam::{DMat3, DVec3};

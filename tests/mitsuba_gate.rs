@@ -6,8 +6,8 @@
 use conformance::catalog::load;
 use conformance::catalog::{repo_root, scenes, Entry};
 use conformance::manifest::Manifest;
-use conformance::mitsuba::harness::{check_mitsuba, read_radiance, render_estimate, GATE_SPP};
-use conformance::mitsuba::stats::{radiance_test, Estimate, RadianceTest};
+use conformance::mitsuba::compare::{radiance_test, Estimate, RadianceTest};
+use conformance::mitsuba::harness::{check, read_radiance, render_estimate, GATE_SPP};
 use conformance::verdict::Verdict;
 use renderer::physical::Fault;
 use renderer::scene::Scene;
@@ -76,16 +76,7 @@ fn test03_a_stale_mitsuba_reference_is_never_a_pass() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("mi_directional.toml");
     std::fs::write(&path, text).unwrap();
-    let o = check_mitsuba(
-        &Entry {
-            name: e.name.clone(),
-            path,
-        },
-        &manifest(),
-        64,
-        None,
-    )
-    .unwrap();
+    let o = check(&Entry { path, ..e.clone() }, &manifest(), 64, None).unwrap();
     assert_eq!(
         o.verdict,
         Verdict::Stale,
@@ -124,7 +115,7 @@ statistical test (see `cargo test --test catalog {name}`)"
             !r.passed(),
             "{name} with its light 2 % brighter: expected the radiance test against the \
 unmodified scene's reference to fail, but {:.2} % of pixel-channels pass and the global z \
-is {:.1?}: the statistical test has become too weak (conformance/src/mitsuba/stats.rs)",
+is {:.1?}: the statistical test has become too weak (conformance/src/mitsuba/compare.rs)",
             r.pass_fraction * 100.0,
             r.global_z
         );
@@ -153,8 +144,8 @@ radiance test to fail, but {:.2} % of pixel-channels pass and the global z is {:
 
 #[test]
 fn test06_geometry_catches_a_half_pixel_shift() {
+    use conformance::mitsuba::compare::geometry_test;
     use conformance::mitsuba::harness::{our_geometry, read_geometry};
-    use conformance::mitsuba::stats::geometry_test;
     for name in ["mi_transformed", "mi_cornell"] {
         let m = manifest();
         let reference = read_geometry(

@@ -9,9 +9,7 @@ use conformance::catalog::load;
 use conformance::catalog::{repo_root, scenes, Entry};
 use conformance::manifest::Manifest;
 use conformance::povray::compare::Comparison;
-use conformance::povray::harness::{
-    check_povray, compare_render, read_reference, render_for_conformance,
-};
+use conformance::povray::harness::{check, compare_render, read_reference, render_for_conformance};
 use conformance::verdict::Verdict;
 use glam::DMat3;
 use renderer::aggregate::Aggregate;
@@ -146,14 +144,7 @@ fn test03_a_stale_reference_is_never_a_pass() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("prim_sphere_identity.toml");
     std::fs::write(&path, text).unwrap();
-    let o = check_povray(
-        &Entry {
-            name: e.name.clone(),
-            path,
-        },
-        &manifest(),
-    )
-    .unwrap();
+    let o = check(&Entry { path, ..e.clone() }, &manifest()).unwrap();
     let c = o.cmp.as_ref().unwrap();
     assert!(
         c.passed(),
@@ -171,7 +162,7 @@ longer matches references/manifest.toml, so the verdict must be STALE, never a p
     let mut m = manifest();
     m.reference.remove("povray/prim_sphere_identity");
     assert_eq!(
-        check_povray(&e, &m).unwrap().verdict,
+        check(&e, &m).unwrap().verdict,
         Verdict::Missing,
         "prim_sphere_identity with its manifest record removed must be MISSING"
     );

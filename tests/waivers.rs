@@ -4,8 +4,9 @@
 //! images that exist.
 
 use conformance::catalog::{load, repo_root, scenes};
-use conformance::gate::{judge, Checked, Judged};
-use conformance::povray::harness::{compare_render, read_reference, Outcome};
+use conformance::gate::{judge, Judged};
+use conformance::povray::harness::{compare_render, read_reference};
+use conformance::povray::outcome::Outcome;
 use conformance::verdict::Verdict;
 use conformance::waivers::Waivers;
 use renderer::render::{render, Options};
@@ -28,7 +29,6 @@ fn outcome(light: f32, verdict_if_fails: Verdict) -> Outcome {
     let cmp = compare_render(&s, &Options::default(), &ours, &rgb);
     Outcome {
         scene: SCENE.into(),
-        reference: "povray".into(),
         verdict: if cmp.passed() {
             Verdict::Pass
         } else {
@@ -57,7 +57,7 @@ fn scratch() -> std::path::PathBuf {
 }
 
 fn judged(light: f32, w: &Waivers) -> Judged {
-    judge(Checked::Povray(outcome(light, Verdict::Fail)), w)
+    judge(Box::new(outcome(light, Verdict::Fail)), w)
 }
 
 #[test]
@@ -129,10 +129,7 @@ fn test03_a_waiver_of_a_passing_check_is_stale_and_rejected() {
 
 #[test]
 fn test04_a_stale_reference_is_never_waived() {
-    let j = judge(
-        Checked::Povray(outcome(1.05, Verdict::Stale)),
-        &waivers("pixels"),
-    );
+    let j = judge(Box::new(outcome(1.05, Verdict::Stale)), &waivers("pixels"));
     assert_eq!(j.verdict, Verdict::Stale);
     assert!(!j.accepted());
     assert!(j

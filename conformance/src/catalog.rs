@@ -22,16 +22,17 @@ pub fn repo_root() -> PathBuf {
 /// A catalog entry.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Entry {
+    /// The catalog (the folder `conformance/scenes/<catalog>/`).
+    pub catalog: String,
     /// Scene name (the file stem).
     pub name: String,
     /// Path of the scene file.
     pub path: PathBuf,
 }
 
-/// The scenes checked against `reference` (e.g. "povray") whose name contains `filter`,
-/// sorted by name.
-pub fn scenes(reference: &str, filter: &str) -> std::io::Result<Vec<Entry>> {
-    let dir = repo_root().join("conformance/scenes").join(reference);
+/// The scenes of `catalog` (e.g. "povray") whose name contains `filter`, sorted by name.
+pub fn scenes(catalog: &str, filter: &str) -> std::io::Result<Vec<Entry>> {
+    let dir = repo_root().join("conformance/scenes").join(catalog);
     let mut v = Vec::new();
     for e in std::fs::read_dir(&dir)? {
         let path = e?.path();
@@ -42,7 +43,11 @@ pub fn scenes(reference: &str, filter: &str) -> std::io::Result<Vec<Entry>> {
                 .to_string_lossy()
                 .into_owned();
             if name.contains(filter) {
-                v.push(Entry { name, path });
+                v.push(Entry {
+                    catalog: catalog.to_string(),
+                    name,
+                    path,
+                });
             }
         }
     }
@@ -50,47 +55,76 @@ pub fn scenes(reference: &str, filter: &str) -> std::io::Result<Vec<Entry>> {
     Ok(v)
 }
 
-/// The scenes of `reference` that a command line's FILTER selects ([`select_in`]).
-pub fn select(reference: &str, filter: &str) -> Result<Vec<Entry>> {
-    Ok(select_in(&[reference], filter)?
+/// The scenes of the catalog `catalog` that a command line's FILTER selects ([`choose`]).
+pub fn select(catalog: &str, filter: &str) -> Result<Vec<Entry>> {
+    Ok(select_in(&[catalog], filter)?
         .into_iter()
         .map(|(_, e)| e)
         .collect())
 }
 
-/// The scenes of the catalogs `references` that a command line's FILTER selects, with
-/// their catalog, in catalog then name order. The same rules everywhere (`conformance
-/// run`, the regeneration commands, the catalog test's filter; conformance/docs/workflows.md):
-/// - `CATALOG::NAME` (a test's name, `povray::shade_phong`) looks in that catalog only,
-///   with NAME as the filter;
+/// The scenes of the catalogs `catalogs` that a command line's FILTER selects, with their
+/// catalog, in catalog then name order ([`choose`]).
+pub fn select_in<'r>(catalogs: &[&'r str], filter: &str) -> Result<Vec<(&'r str, Entry)>> {
+    let sources: Vec<Source<'_, &'r str>> = catalogs
+        .iter()
+        .map(|&c| Source {
+            key: c,
+            name: c,
+            folder: c,
+            list: Box::new(move || {
+                scenes(c, "").with_context(|| format!("reading conformance/scenes/{c}/"))
+            }),
+        })
+        .collect();
+    choose(&sources, filter)
+}
+
+/// Where a selection looks: a named set of catalog scenes (a catalog, or the scenes of a
+/// catalog that one reference covers).
+pub struct Source<'a, K> {
+    /// What a selected scene is returned with.
+    pub key: K,
+    /// The name a FILTER's `NAME::` prefix picks it by.
+    pub name: &'a str,
+    /// Its catalog, for messages.
+    pub folder: &'a str,
+    /// Its scenes, listed only when the FILTER looks in it.
+    pub list: Box<dyn Fn() -> Result<Vec<Entry>> + 'a>,
+}
+
+/// The scenes of `sources` that a command line's FILTER selects, each with its source's
+/// key, in source then name order. The same rules everywhere (`conformance run`, the
+/// regeneration commands, the catalog test's filter; conformance/docs/workflows.md):
+/// - `NAME::SCENE` (a test's name, `povray::shade_phong`) looks in the source of that
+///   name only, with SCENE as the filter;
 /// - a FILTER that is a scene's whole name selects that scene alone (`shade_phong`, not
 ///   also `shade_phong_size`);
 /// - any other FILTER selects every scene whose name contains it (empty: every scene).
 ///
 /// An empty selection is an error that lists close names.
-pub fn select_in<'r>(references: &[&'r str], filter: &str) -> Result<Vec<(&'r str, Entry)>> {
-    let (references, name) = match filter.split_once("::") {
-        Some((catalog, name)) => {
-            let Some(r) = references.iter().find(|r| **r == catalog) else {
+pub fn choose<K: Clone>(sources: &[Source<'_, K>], filter: &str) -> Result<Vec<(K, Entry)>> {
+    let (sources, name): (Vec<&Source<'_, K>>, &str) = match filter.split_once("::") {
+        Some((prefix, name)) => {
+            let Some(s) = sources.iter().find(|s| s.name == prefix) else {
+                let names: Vec<&str> = sources.iter().map(|s| s.name).collect();
                 anyhow::bail!(
-                    "'{filter}': no catalog named '{catalog}' here (catalogs: {})",
-                    references.join(", ")
+                    "'{filter}': no catalog named '{prefix}' here (catalogs: {})",
+                    names.join(", ")
                 );
             };
-            (std::slice::from_ref(r), name)
+            (vec![s], name)
         }
-        None => (references, filter),
+        None => (sources.iter().collect(), filter),
     };
     let mut all = Vec::new();
-    for reference in references {
-        for e in scenes(reference, "")
-            .with_context(|| format!("reading conformance/scenes/{reference}/"))?
-        {
-            all.push((*reference, e));
+    for s in &sources {
+        for e in (s.list)()? {
+            all.push((s.key.clone(), e));
         }
     }
     let exact = all.iter().any(|(_, e)| e.name == name);
-    let chosen: Vec<(&'r str, Entry)> = all
+    let chosen: Vec<(K, Entry)> = all
         .iter()
         .filter(|(_, e)| {
             if exact {
@@ -104,10 +138,13 @@ pub fn select_in<'r>(references: &[&'r str], filter: &str) -> Result<Vec<(&'r st
     if chosen.is_empty() {
         let names: Vec<String> = all.into_iter().map(|(_, e)| e.name).collect();
         let close = close_names(name, &names);
-        let folders: Vec<String> = references
-            .iter()
-            .map(|r| format!("conformance/scenes/{r}/"))
-            .collect();
+        let mut folders: Vec<String> = Vec::new();
+        for s in &sources {
+            let f = format!("conformance/scenes/{}/", s.folder);
+            if !folders.contains(&f) {
+                folders.push(f);
+            }
+        }
         anyhow::bail!(
             "no catalog scene matches '{filter}'{}",
             if close.is_empty() {

@@ -1,5 +1,6 @@
-//! Image files shared by the failure output and the report: PNG writing, false-colour z
-//! images, and wrapping raw RGB as an [`Image`].
+//! Image files shared by the failure output and the report: PNG writing, and wrapping raw
+//! RGB as an [`Image`]. What an image shows of a comparison is each reference's
+//! ([`crate::checked::Checked::figure`]).
 
 use anyhow::{Context, Result};
 use renderer::render::Image;
@@ -27,21 +28,4 @@ pub fn image_of(w: u32, h: u32, rgb: &[f32]) -> Image {
         moments: None,
         samples: 0,
     }
-}
-
-/// A false-colour image of per-pixel z: black to white up to z = 2, orange up to the
-/// Šidák threshold, red beyond it.
-pub fn z_image(z: &[f64], alpha: f64) -> Vec<u8> {
-    let mut out = Vec::with_capacity(z.len() * 3);
-    for &v in z {
-        if crate::mitsuba::stats::p_value(v) <= alpha {
-            out.extend_from_slice(&[230, 0, 0]);
-        } else if v > 2.0 {
-            out.extend_from_slice(&[255, 160, 0]);
-        } else {
-            let g = (v / 2.0 * 200.0) as u8;
-            out.extend_from_slice(&[g, g, g]);
-        }
-    }
-    out
 }

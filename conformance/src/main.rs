@@ -3,9 +3,11 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
-use conformance::catalog::{repo_root, select, select_in};
-use conformance::gate::{self, REFERENCES};
+use conformance::catalog::{repo_root, Entry};
+use conformance::gate;
 use conformance::manifest::Manifest;
+use conformance::reference::{ExportOptions, Reference, RegenOptions};
+use conformance::registry::Registry;
 use conformance::waivers::Waivers;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -30,32 +32,27 @@ enum Cmd {
         #[arg(default_value = "")]
         filter: String,
     },
-    /// Export a scene file to POV-Ray SDL.
-    ExportPov {
+    /// Export a scene file to a reference renderer's input: `export povray` writes
+    /// POV-Ray SDL, `export mitsuba` Mitsuba 3 XML (meshes beside it).
+    Export {
+        /// The reference (povray, mitsuba).
+        reference: String,
         /// The scene file.
         scene: PathBuf,
-        /// Output .pov file.
+        /// The output file (.pov, .xml).
         #[arg(short, long)]
         output: PathBuf,
-    },
-    /// Export a scene file to Mitsuba 3 XML (meshes are written beside it).
-    ExportMitsuba {
-        /// The scene file.
-        scene: PathBuf,
-        /// Output .xml file.
-        #[arg(short, long)]
-        output: PathBuf,
-        /// Samples per pixel for the sampler.
-        #[arg(long, default_value_t = 64)]
-        spp: u32,
-        /// Wrap the integrator in Mitsuba's `moment` integrator.
+        /// Samples per pixel of the exported sampler (sampled references; Mitsuba: 64).
+        #[arg(long)]
+        spp: Option<u32>,
+        /// Wrap the integrator in one that also writes second moments (Mitsuba's `moment`).
         #[arg(long)]
         moment: bool,
     },
     /// Add a scene to a catalog and generate its references: writes
     /// conformance/scenes/CATALOG/NAME.toml (a copy of --from, or a small starting scene),
-    /// then renders its references with the reference tool and records them in
-    /// references/manifest.toml.
+    /// then renders its references with each reference tool that checks it and records
+    /// them in references/manifest.toml.
     NewScene {
         /// The scene's name: lower-case letters, digits and underscores.
         name: String,
@@ -66,43 +63,27 @@ enum Cmd {
         #[arg(long)]
         from: Option<PathBuf>,
         /// Only write the scene file; generate its references later with
-        /// scripts/regen-CATALOG.sh NAME.
+        /// scripts/regen-REFERENCE.sh NAME.
         #[arg(long)]
         no_references: bool,
-        /// Samples per pixel of a Mitsuba radiance reference.
-        #[arg(long, default_value_t = 8192)]
-        spp: u32,
+        /// Samples per pixel of a sampled reference (Mitsuba radiance: 8192).
+        #[arg(long)]
+        spp: Option<u32>,
     },
-    /// Regenerate Mitsuba references (needs `pip install mitsuba`; see scripts/regen-mitsuba.sh).
-    RegenMitsuba {
+    /// Regenerate a reference renderer's references (needs the tool; see
+    /// scripts/regen-REFERENCE.sh, which installs it).
+    Regen {
+        /// The reference (povray, mitsuba).
+        reference: String,
         /// Which scenes, as for `run`.
         #[arg(default_value = "")]
         filter: String,
-        /// Samples per pixel of the radiance references.
-        #[arg(long, default_value_t = 8192)]
-        spp: u32,
+        /// Samples per pixel of a sampled reference (Mitsuba radiance: 8192).
+        #[arg(long, conflicts_with = "check")]
+        spp: Option<u32>,
         /// Re-render from scratch into a temporary folder and check the result against the
-        /// committed references, instead of replacing them.
-        #[arg(long)]
-        check: bool,
-    },
-    /// Regenerate Blender Cycles references (needs `bpy`; see scripts/regen-cycles.sh).
-    RegenCycles {
-        /// Which scenes of the physical catalog, as for `run`.
-        #[arg(default_value = "")]
-        filter: String,
-        /// Re-render from scratch into a temporary folder and check the result against the
-        /// committed references, instead of replacing them.
-        #[arg(long)]
-        check: bool,
-    },
-    /// Regenerate POV-Ray references (needs povray; see scripts/regen-povray.sh).
-    RegenPovray {
-        /// Which scenes, as for `run`.
-        #[arg(default_value = "")]
-        filter: String,
-        /// Render into a temporary folder and check that the result equals the committed
-        /// references bit for bit, instead of replacing them.
+        /// committed references (bit for bit, or statistically for a sampled reference),
+        /// instead of replacing them.
         #[arg(long)]
         check: bool,
     },
@@ -123,31 +104,23 @@ fn main() -> ExitCode {
 }
 
 fn run() -> Result<ExitCode> {
+    let registry = Registry::committed();
     match Cli::parse().cmd {
         Cmd::Run { filter } => {
             let root = repo_root();
             let manifest = Manifest::load(&root.join("references/manifest.toml"))?;
             let waivers = Waivers::committed()?;
-            let chosen = match select_in(&REFERENCES, &filter) {
-                Ok(c) => c,
-                Err(e) => {
-                    eprintln!("error: {e:#}");
-                    return Ok(ExitCode::from(2));
-                }
-            };
-            let mut judged = Vec::new();
-            for (reference, e) in &chosen {
-                judged.push(
-                    gate::check(reference, e, &manifest, &waivers)
-                        .with_context(|| format!("{reference}/{}", e.name))?,
-                );
+            if let Err(e) = registry.select(&filter) {
+                eprintln!("error: {e:#}");
+                return Ok(ExitCode::from(2));
             }
+            let judged = gate::check_all(&registry, &filter, &manifest, &waivers)?;
             print!("{}", conformance::report::table(&judged));
             for j in judged.iter().filter(|j| !j.accepted()) {
                 print!("\n{}", j.failure_message());
             }
             let dir = gate::report_dir();
-            conformance::report::write(&dir, &judged)?;
+            conformance::report::write(&dir, &judged, &registry)?;
             println!("report: {}", dir.join("index.html").display());
             Ok(if judged.iter().all(|j| j.accepted()) {
                 ExitCode::SUCCESS
@@ -155,27 +128,20 @@ fn run() -> Result<ExitCode> {
                 ExitCode::from(1)
             })
         }
-        Cmd::ExportPov { scene, output } => {
-            let s = renderer::scene::Scene::load(&scene)?;
-            let title = scene
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            let sdl = conformance::povray::export(&s, &title);
-            std::fs::write(&output, sdl)
-                .with_context(|| format!("writing {}", output.display()))?;
-            Ok(ExitCode::SUCCESS)
-        }
-        Cmd::ExportMitsuba {
+        Cmd::Export {
+            reference,
             scene,
             output,
             spp,
             moment,
         } => {
+            let r = registry.get(&reference)?;
             let s = renderer::scene::Scene::load(&scene)?;
-            let e = conformance::mitsuba::export(&s, spp, moment)?;
-            e.write(&output)
-                .with_context(|| format!("writing {}", output.display()))?;
+            let title = scene
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            r.export(&s, &title, &ExportOptions { spp, moment }, &output)?;
             Ok(ExitCode::SUCCESS)
         }
         Cmd::NewScene {
@@ -185,93 +151,88 @@ fn run() -> Result<ExitCode> {
             no_references,
             spp,
         } => {
-            let path = new_scene(&name, &catalog, from.as_deref())?;
+            let references = registry.of_catalog(&catalog);
+            anyhow::ensure!(
+                !references.is_empty(),
+                "--catalog {catalog}: unknown catalog (one of: {})",
+                registry.catalogs().join(", ")
+            );
+            let path = new_scene(&name, &catalog, &references, from.as_deref())?;
             println!("wrote {}", path.display());
-            let entries = select(&catalog, &name)?;
+            // The references that check the new scene, each with it as its one entry.
+            let mut checking: Vec<(&dyn Reference, Vec<Entry>)> = Vec::new();
+            for r in references {
+                let entries: Vec<Entry> = registry
+                    .scenes(r)?
+                    .into_iter()
+                    .filter(|e| e.name == name)
+                    .collect();
+                if !entries.is_empty() {
+                    checking.push((r, entries));
+                }
+            }
+            let commands: Vec<String> = checking
+                .iter()
+                .map(|(r, _)| gate::regen_command(r.name(), &name))
+                .collect();
             if no_references {
-                println!(
-                    "generate its references with: {}",
-                    gate::regen_command(&catalog, &name)
-                );
+                println!("generate its references with: {}", commands.join("; "));
                 return Ok(ExitCode::SUCCESS);
             }
-            let made = match catalog.as_str() {
-                "povray" => conformance::povray::refgen::regenerate(&entries),
-                _ => conformance::mitsuba::refgen::regenerate(&entries, spp),
-            };
-            made.with_context(|| {
-                format!(
-                    "the scene file was written, but its references were not: run {} (it installs the tool)",
-                    gate::regen_command(&catalog, &name)
-                )
-            })?;
+            for (r, entries) in &checking {
+                r.regenerate(entries, &RegenOptions { spp }).with_context(|| {
+                    format!(
+                        "the scene file was written, but its {} references were not: run {} (it installs the tool)",
+                        r.title(),
+                        gate::regen_command(r.name(), &name)
+                    )
+                })?;
+            }
             println!(
-                "references written and recorded in references/manifest.toml; check with: cargo test --test catalog {catalog}::{name}"
+                "references written and recorded in references/manifest.toml; check with: cargo test --test catalog {name}"
             );
             Ok(ExitCode::SUCCESS)
         }
-        Cmd::RegenMitsuba { filter, spp, check } => {
-            let entries = select("mitsuba", &filter)?;
-            if check {
-                let bad = conformance::mitsuba::refgen::check(&entries)?;
-                if bad.is_empty() {
-                    println!("{} Mitsuba reference(s) regenerated from scratch and consistent with the committed files", entries.len());
-                    Ok(ExitCode::SUCCESS)
-                } else {
-                    println!("regenerated Mitsuba references differ: {}", bad.join(", "));
-                    Ok(ExitCode::from(1))
-                }
-            } else {
-                conformance::mitsuba::refgen::regenerate(&entries, spp)?;
-                Ok(ExitCode::SUCCESS)
+        Cmd::Regen {
+            reference,
+            filter,
+            spp,
+            check,
+        } => {
+            let r = registry.get(&reference)?;
+            let entries = registry.select_for(r, &filter)?;
+            if !check {
+                r.regenerate(&entries, &RegenOptions { spp })?;
+                return Ok(ExitCode::SUCCESS);
             }
-        }
-        Cmd::RegenCycles { filter, check } => {
-            let entries = select("mitsuba", &filter)?;
-            if check {
-                let bad = conformance::cycles::refgen::check(&entries)?;
-                if bad.is_empty() {
-                    println!("{} Cycles reference(s) regenerated from scratch and consistent with the committed files", entries.len());
-                    Ok(ExitCode::SUCCESS)
-                } else {
-                    println!("regenerated Cycles references differ: {}", bad.join(", "));
-                    Ok(ExitCode::from(1))
-                }
-            } else {
-                conformance::cycles::refgen::regenerate(&entries)?;
+            let bad = r.check_regenerated(&entries)?;
+            if bad.is_empty() {
+                println!(
+                    "{} {} reference(s) regenerated from scratch and consistent with the committed files",
+                    entries.len(),
+                    r.title()
+                );
                 Ok(ExitCode::SUCCESS)
-            }
-        }
-        Cmd::RegenPovray { filter, check } => {
-            let entries = select("povray", &filter)?;
-            if check {
-                let bad = conformance::povray::refgen::check(&entries)?;
-                if bad.is_empty() {
-                    println!("{} reference(s) regenerated from scratch and identical to the committed files", entries.len());
-                    Ok(ExitCode::SUCCESS)
-                } else {
-                    println!("regenerated references differ: {}", bad.join(", "));
-                    Ok(ExitCode::from(1))
-                }
             } else {
-                conformance::povray::refgen::regenerate(&entries)?;
-                Ok(ExitCode::SUCCESS)
+                println!(
+                    "regenerated {} references differ: {}",
+                    r.title(),
+                    bad.join(", ")
+                );
+                Ok(ExitCode::from(1))
             }
         }
     }
 }
 
-/// The built-in starting scenes of `new-scene`, per catalog.
-const STARTERS: [(&str, &str); 2] = [
-    ("povray", "prim_sphere_identity"),
-    ("mitsuba", "mi_diffuse_point"),
-];
-
-/// Writes a new catalog scene file and returns its path.
-fn new_scene(name: &str, catalog: &str, from: Option<&std::path::Path>) -> Result<PathBuf> {
-    let Some((_, starter)) = STARTERS.iter().find(|(c, _)| *c == catalog) else {
-        anyhow::bail!("--catalog {catalog}: unknown catalog (one of: povray, mitsuba)");
-    };
+/// Writes a new catalog scene file and returns its path. Without `from`, the scene starts
+/// as a copy of the starting scene of the catalog's `references` ([`Reference::starter`]).
+fn new_scene(
+    name: &str,
+    catalog: &str,
+    references: &[&dyn Reference],
+    from: Option<&std::path::Path>,
+) -> Result<PathBuf> {
     anyhow::ensure!(
         !name.is_empty()
             && name
@@ -285,11 +246,23 @@ fn new_scene(name: &str, catalog: &str, from: Option<&std::path::Path>) -> Resul
         !path.exists(),
         "{} already exists: to regenerate its references run {}",
         path.display(),
-        gate::regen_command(catalog, name)
+        references
+            .iter()
+            .map(|r| gate::regen_command(r.name(), name))
+            .collect::<Vec<_>>()
+            .join("; ")
     );
-    let source = from
-        .map(PathBuf::from)
-        .unwrap_or_else(|| dir.join(format!("{starter}.toml")));
+    let source = match from {
+        Some(f) => PathBuf::from(f),
+        None => {
+            let Some(starter) = references.iter().find_map(|r| r.starter()) else {
+                anyhow::bail!(
+                    "--catalog {catalog}: no reference of it has a starting scene; give one with --from"
+                );
+            };
+            dir.join(format!("{starter}.toml"))
+        }
+    };
     let body = std::fs::read_to_string(&source)
         .with_context(|| format!("reading {}", source.display()))?;
     // The scene must load before it becomes part of the catalog.

@@ -5,7 +5,8 @@
 //! ```toml
 //! [[waiver]]
 //! scene = "povray/shade_phong"   # <reference>/<scene name>
-//! check = "pixels"               # povray: pixels; mitsuba: radiance or geometry
+//! check = "pixels"               # one of the reference's checks (`Reference::checks`):
+//!                                # povray: pixels; mitsuba: radiance or geometry
 //! reason = "POV-Ray 3.7 clamps the phong exponent; we follow the 3.8 fix"
 //! date = "2026-11-24"
 //! ```
@@ -14,15 +15,10 @@
 //! check again, the waiver is **stale**, and the gate fails until it is removed. A stale
 //! reference is never waived: a waiver excuses a divergence, not an outdated reference.
 
+use crate::registry::Registry;
 use anyhow::{bail, Context, Result};
 use serde::Deserialize;
 use std::path::Path;
-
-/// The checks a waiver can name, per reference.
-pub const CHECKS: [(&str, &[&str]); 2] = [
-    ("povray", &["pixels"]),
-    ("mitsuba", &["radiance", "geometry"]),
-];
 
 /// One waiver.
 #[derive(Clone, Debug, PartialEq, Eq, Deserialize)]
@@ -30,7 +26,7 @@ pub const CHECKS: [(&str, &[&str]); 2] = [
 pub struct Waiver {
     /// `<reference>/<scene name>`, e.g. `povray/shade_phong`.
     pub scene: String,
-    /// The check it excuses (see [`CHECKS`]).
+    /// The check it excuses (one of its reference's `checks`).
     pub check: String,
     /// Why the divergence is deliberate.
     pub reason: String,
@@ -58,9 +54,14 @@ pub struct Waivers {
 }
 
 impl Waivers {
-    /// Loads `path`; a missing file means no waivers. Errors name the file, line and
-    /// column, and the field.
+    /// Loads `path` for the committed references; a missing file means no waivers.
+    /// Errors name the file, line and column, and the field.
     pub fn load(path: &Path) -> Result<Waivers> {
+        Self::load_with(path, &Registry::committed())
+    }
+
+    /// [`Self::load`] for the references of `registry`.
+    pub fn load_with(path: &Path, registry: &Registry) -> Result<Waivers> {
         let text = match std::fs::read_to_string(path) {
             Ok(t) => t,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
@@ -71,11 +72,16 @@ impl Waivers {
             }
             Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
         };
-        Self::parse(&text, path)
+        Self::parse_with(&text, path, registry)
     }
 
-    /// Parses the text of a waivers file.
+    /// Parses the text of a waivers file for the committed references.
     pub fn parse(text: &str, path: &Path) -> Result<Waivers> {
+        Self::parse_with(text, path, &Registry::committed())
+    }
+
+    /// Parses the text of a waivers file whose entries name the references of `registry`.
+    pub fn parse_with(text: &str, path: &Path, registry: &Registry) -> Result<Waivers> {
         let file: File = toml::from_str(text).map_err(|e| {
             let (line, col) = e.span().map(|s| line_col(text, s.start)).unwrap_or((0, 0));
             anyhow::anyhow!("{}:{line}:{col}: {}", path.display(), e.message())
@@ -97,9 +103,13 @@ impl Waivers {
                     w.scene
                 );
             };
-            let Some((_, checks)) = CHECKS.iter().find(|(r, _)| *r == reference) else {
-                bail!("{at}: waiver.scene: unknown reference `{reference}` (povray or mitsuba)");
+            let Ok(r) = registry.get(reference) else {
+                bail!(
+                    "{at}: waiver.scene: unknown reference `{reference}` (one of: {})",
+                    registry.names().join(", ")
+                );
             };
+            let checks = r.checks();
             if !checks.contains(&w.check.as_str()) {
                 bail!(
                     "{at}: waiver.check `{}` is not a check of {reference} (one of: {})",

@@ -1,25 +1,27 @@
 //! Checking catalog scenes against Cycles: geometry (our pixel-centre AOVs against Cycles'
 //! geometry render) and radiance (the two-sample statistical test against the mean and
 //! seed variance of the reference), with the same tests and tolerances as Mitsuba's
-//! (`crate::mitsuba::stats`).
+//! (`crate::mitsuba::compare`).
 
 use super::refgen::export_text;
 use super::refs::read_radiance;
 use crate::catalog::{load, repo_root, Entry};
 use crate::manifest::{freshness, Freshness, Manifest};
-use crate::mitsuba::harness::{our_geometry, read_geometry, render_estimate, MiOutcome};
-use crate::mitsuba::stats::{geometry_test, radiance_test, Estimate};
+use super::outcome::Outcome;
+use crate::mitsuba::harness::{our_geometry, read_geometry, render_estimate};
+use crate::mitsuba::outcome::Outcome as Measured;
+use crate::mitsuba::compare::{geometry_test, radiance_test, Estimate};
 use crate::verdict::Verdict;
 use anyhow::{Context, Result};
 use renderer::physical::Fault;
 
 /// Checks one catalog scene against its Cycles references, rendering ours at `spp`.
-pub fn check_cycles(
+pub fn check(
     entry: &Entry,
     manifest: &Manifest,
     spp: u32,
     fault: Option<Fault>,
-) -> Result<MiOutcome> {
+) -> Result<Outcome> {
     let (scene, text) = load(entry)?;
     anyhow::ensure!(
         !scene.settings.adaptive,
@@ -35,7 +37,7 @@ pub fn check_cycles(
         .reference
         .get(&format!("cycles-geometry/{}", entry.name));
     let (Some(rad), Some(geo)) = (rad, geo) else {
-        return Ok(MiOutcome {
+        return Ok(Outcome(Measured {
             scene: entry.name.clone(),
             verdict: Verdict::Missing,
             geometry: None,
@@ -43,7 +45,7 @@ pub fn check_cycles(
             ours,
             reference_rgb: None,
             seconds,
-        });
+        }));
     };
     let n = rad.spp.context("a Cycles radiance record has spp")?;
     let json = export_text(&scene)?;
@@ -75,7 +77,7 @@ pub fn check_cycles(
     } else {
         Verdict::Fail
     };
-    Ok(MiOutcome {
+    Ok(Outcome(Measured {
         scene: entry.name.clone(),
         verdict,
         geometry: Some(geometry),
@@ -83,5 +85,5 @@ pub fn check_cycles(
         ours,
         reference_rgb: Some(ref_rgb),
         seconds,
-    })
+    }))
 }

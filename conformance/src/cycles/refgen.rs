@@ -6,7 +6,7 @@ use super::refs::{combine_seeds, read_geometry_render, read_seed, write_geometry
 use crate::catalog::{load, repo_root, scratch_dir, Entry};
 use crate::manifest::{sha256, today, Manifest, Record};
 use crate::mitsuba::harness::read_geometry;
-use crate::mitsuba::stats::{geometry_test, radiance_test};
+use crate::mitsuba::compare::{geometry_test, radiance_test};
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -7,14 +7,14 @@
 //! of their grand mean is s²/K. The committed radiance reference stores the grand mean and
 //! the **per-sample equivalent** S·s², with n = K·S in the manifest's `spp`, so that
 //! `var / n` is the grand mean's variance and the reference plugs into the same two-sample
-//! test as Mitsuba's (`crate::mitsuba::stats`).
+//! test as Mitsuba's (`crate::mitsuba::compare`).
 //!
 //! | file | channels |
 //! |---|---|
 //! | `references/cycles/<scene>.exr` | R, G, B (mean); mean.X/Y/Z (CIE XYZ mean); var.X/Y/Z (per-sample equivalent variance) |
 //! | `references/cycles/<scene>.geom.exr` | Z (distance from the eye), N.X/Y/Z (outward unit normal, our world), mask |
 
-use crate::mitsuba::stats::{Estimate, Geometry, SRGB_TO_XYZ};
+use crate::mitsuba::compare::{Estimate, Geometry, SRGB_TO_XYZ};
 use anyhow::{ensure, Context, Result};
 use glam::DVec3;
 use renderer::output::{read_exr, ExrImage};

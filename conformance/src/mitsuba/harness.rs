@@ -2,7 +2,8 @@
 //! Mitsuba's `ray_intersect`) and radiance (a statistical test against the `moment`
 //! integrator's mean and variance).
 
-use super::stats::{geometry_test, radiance_test, Estimate, Geometry, GeometryTest, RadianceTest};
+use super::compare::{geometry_test, radiance_test, Estimate, Geometry};
+use super::outcome::Outcome;
 use crate::catalog::load;
 use crate::catalog::{repo_root, Entry};
 use crate::manifest::{freshness, Freshness, Manifest};
@@ -16,24 +17,6 @@ use std::path::Path;
 
 /// Samples per pixel of our render in the gate.
 pub const GATE_SPP: u32 = 256;
-
-/// One scene against Mitsuba.
-pub struct MiOutcome {
-    /// Scene name.
-    pub scene: String,
-    /// The verdict over both tests and freshness.
-    pub verdict: Verdict,
-    /// The geometric comparison.
-    pub geometry: Option<GeometryTest>,
-    /// The statistical comparison.
-    pub radiance: Option<RadianceTest>,
-    /// Our render (RGB mean, AOVs, moments).
-    pub ours: Image,
-    /// The reference's RGB mean.
-    pub reference_rgb: Option<Vec<f32>>,
-    /// Seconds our render took.
-    pub seconds: f64,
-}
 
 /// Our render for the statistical test: `spp` samples, second moments and AOVs.
 pub fn render_estimate(scene: &Scene, spp: u32, fault: Option<Fault>) -> Image {
@@ -132,12 +115,12 @@ pub fn export_text(scene: &Scene, spp: u32) -> Result<String> {
 }
 
 /// Checks one catalog scene against its Mitsuba references, rendering ours at `spp`.
-pub fn check_mitsuba(
+pub fn check(
     entry: &Entry,
     manifest: &Manifest,
     spp: u32,
     fault: Option<Fault>,
-) -> Result<MiOutcome> {
+) -> Result<Outcome> {
     let (scene, text) = load(entry)?;
     anyhow::ensure!(
         !scene.settings.adaptive,
@@ -152,7 +135,7 @@ pub fn check_mitsuba(
     let geo = manifest
         .reference
         .get(&format!("mitsuba-geometry/{}", entry.name));
-    let missing = |ours| MiOutcome {
+    let missing = |ours| Outcome {
         scene: entry.name.clone(),
         verdict: Verdict::Missing,
         geometry: None,
@@ -194,7 +177,7 @@ pub fn check_mitsuba(
     } else {
         Verdict::Fail
     };
-    Ok(MiOutcome {
+    Ok(Outcome {
         scene: entry.name.clone(),
         verdict,
         geometry: Some(geometry),

@@ -2,8 +2,8 @@
 //! ray casts) and radiance (the `moment` integrator) with `scripts/mitsuba_refs.py`, and
 //! record the manifest entries.
 
+use super::compare::Geometry;
 use super::harness::{export_text, read_geometry, read_radiance};
-use super::stats::Geometry;
 use crate::catalog::{load, repo_root, scratch_dir, Entry};
 use crate::manifest::{sha256, today, Manifest, Record};
 use anyhow::{bail, Context, Result};
@@ -153,7 +153,7 @@ pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
         }
         let (_, r_new) = read_radiance(&tmp.join(format!("{}.exr", e.name)), spp)?;
         let (_, r_old) = read_radiance(&committed.join(format!("{}.exr", e.name)), spp)?;
-        let stat = super::stats::radiance_test(&r_new, &r_old);
+        let stat = super::compare::radiance_test(&r_new, &r_old);
         let old_geo = manifest
             .reference
             .get(&format!("mitsuba-geometry/{}", e.name));

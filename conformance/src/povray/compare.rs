@@ -314,6 +314,16 @@ impl Centre {
     }
 }
 
+/// The largest channel error of pixel `k`, in units of [`tol`].
+pub fn error_in_tolerances(ours: &[f32], reference: &[f32], k: usize) -> f64 {
+    (0..3)
+        .map(|c| {
+            let r = reference[3 * k + c] as f64;
+            (ours[3 * k + c] as f64 - r).abs() / tol(r)
+        })
+        .fold(0.0, f64::max)
+}
+
 /// A false-colour difference image (8-bit RGB): the reference's luminance dimmed to grey
 /// where the pixel agrees, blue for pixels excused by geometry, and for failing pixels a
 /// colour that encodes the error relative to the tolerance on a log scale: yellow at 1×,

@@ -1,6 +1,8 @@
-//! Running the POV-Ray catalog: render each scene, check its reference is fresh, compare.
+//! Checking a catalog scene against POV-Ray: render it at pixel centres, check its
+//! reference is fresh, compare (re-tracing the pixels outside tolerance).
 
 use super::compare::{compare, Comparison, Sample};
+use super::outcome::Outcome;
 use crate::catalog::{load, repo_root, Entry};
 use crate::manifest::{freshness, Freshness, Manifest};
 use crate::verdict::Verdict;
@@ -9,24 +11,6 @@ use renderer::real::Real;
 use renderer::render::{render, Image, Options};
 use renderer::scene::Scene;
 use renderer::shading::Shader;
-
-/// One row of the report.
-pub struct Outcome {
-    /// Scene name.
-    pub scene: String,
-    /// Reference tool.
-    pub reference: String,
-    /// The verdict.
-    pub verdict: Verdict,
-    /// The comparison, when a reference exists.
-    pub cmp: Option<Comparison>,
-    /// Our render.
-    pub ours: Image,
-    /// The reference pixels (RGB), when they exist.
-    pub reference_rgb: Option<Vec<f32>>,
-    /// Seconds our render took.
-    pub seconds: f64,
-}
 
 /// Renders a scene the way the conformance suite does: pixel centres, every core.
 pub fn render_for_conformance(scene: &Scene) -> Image {
@@ -98,7 +82,7 @@ pub fn read_reference(path: &std::path::Path) -> Result<(usize, usize, Vec<f32>)
 }
 
 /// Checks one catalog scene against its POV-Ray reference.
-pub fn check_povray(entry: &Entry, manifest: &Manifest) -> Result<Outcome> {
+pub fn check(entry: &Entry, manifest: &Manifest) -> Result<Outcome> {
     let (scene, text) = load(entry)?;
     let sdl = super::export(&scene, &entry.name);
     let key = format!("povray/{}", entry.name);
@@ -116,7 +100,6 @@ pub fn check_povray(entry: &Entry, manifest: &Manifest) -> Result<Outcome> {
     if fresh == Freshness::Missing || !path.exists() {
         return Ok(Outcome {
             scene: entry.name.clone(),
-            reference: "povray".into(),
             verdict: Verdict::Missing,
             cmp: None,
             ours,
@@ -140,7 +123,6 @@ pub fn check_povray(entry: &Entry, manifest: &Manifest) -> Result<Outcome> {
     };
     Ok(Outcome {
         scene: entry.name.clone(),
-        reference: "povray".into(),
         verdict,
         cmp: Some(cmp),
         ours,

@@ -14,15 +14,15 @@ mod plots;
 mod results;
 mod table;
 
-use crate::gate::{Checked, Judged, REFERENCES};
-use crate::povray::compare::{diff_image, SILHOUETTE_BUDGET};
+use crate::gate::{by_scene, Judged};
+use crate::registry::Registry;
 use crate::verdict::Verdict;
 use anyhow::{Context, Result};
 use renderer::output::{to_rgb8, ToneMap};
 use std::fmt::Write;
 use std::path::Path;
 
-pub use crate::images::{save_png, z_image};
+pub use crate::images::save_png;
 use html::html_escape;
 pub use results::{Results, Row};
 use table::VERDICTS;
@@ -34,17 +34,14 @@ fn srgb(w: u32, h: u32, rgb: &[f32]) -> Vec<u8> {
 
 /// Sort key: scenes that need attention first, then waived, then passing; by catalog and
 /// name.
-fn order(j: &Judged) -> (u8, u8, String) {
+fn order(j: &Judged, registry: &Registry) -> (u8, usize, String) {
     let rank = match (j.accepted(), j.verdict) {
         (false, _) => 0,
         (true, Verdict::Waived) => 1,
         _ => 2,
     };
-    let catalog = REFERENCES
-        .iter()
-        .position(|r| *r == j.checked.reference())
-        .unwrap_or(REFERENCES.len()) as u8;
-    (rank, catalog, j.checked.scene().to_string())
+    let reference = registry.position(j.checked.reference());
+    (rank, reference, j.checked.scene().to_string())
 }
 
 const STYLE: &str = "body{font-family:sans-serif;margin:2em;max-width:1400px}\
@@ -69,15 +66,16 @@ document.body.dataset.images=imgs.length;document.body.dataset.brokenImages=bad.
 if(bad.length){document.getElementById('broken').textContent=bad.length+' image(s) failed to load: '+bad.join(', ')}});\
 </script>";
 
-/// Writes the images, `results.json`, and `index.html` under `dir`.
-pub fn write(dir: &Path, judged: &[Judged]) -> Result<()> {
+/// Writes the images, `results.json`, and `index.html` under `dir`, with a part for each
+/// reference of `registry`.
+pub fn write(dir: &Path, judged: &[Judged], registry: &Registry) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let data = results::results(judged);
+    let data = results::results(judged, registry);
     let json_path = dir.join("results.json");
     std::fs::write(&json_path, serde_json::to_string_pretty(&data)?)
         .with_context(|| format!("writing {}", json_path.display()))?;
     let mut sorted: Vec<&Judged> = judged.iter().collect();
-    sorted.sort_by_key(|j| order(j));
+    sorted.sort_by_key(|j| order(j, registry));
 
     let mut html = format!(
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>Conformance report</title><style>{STYLE}</style></head><body>\n<h1>Conformance report</h1>\n<p>Measured {} by {}.</p><p id=\"broken\"></p>\n",
@@ -89,7 +87,7 @@ pub fn write(dir: &Path, judged: &[Judged]) -> Result<()> {
         write!(html, "<th>{v}</th>")?;
     }
     html.push_str("<th>stale waivers</th><th>scenes</th></tr>\n");
-    for reference in REFERENCES {
+    for reference in registry.names() {
         let of: Vec<&Judged> = judged
             .iter()
             .filter(|j| j.checked.reference() == reference)
@@ -108,27 +106,24 @@ pub fn write(dir: &Path, judged: &[Judged]) -> Result<()> {
         html,
         "<p><label><input type=\"checkbox\" id=\"attention\"> show only the {attention} scene(s) that need attention (failing, stale, missing, or with a stale waiver)</label></p>"
     )?;
+    // The scenes more than one reference checks: each one's verdict, and where they
+    // disagree.
+    several(&mut html, judged, registry)?;
     // Legend.
-    writeln!(
-        html,
+    html.push_str(
         "<h2>How to read it</h2><p>Hover over (or click) our image to see the reference in its place. \
-POV-Ray scenes: the difference image shows agreeing pixels as dimmed grey, pixels excused by geometry \
-<span class=\"sw\" style=\"background:rgb(0,160,255)\"></span> blue, and failing pixels by the size of the error \
-relative to the per-pixel tolerance (1.05·2<sup>−11</sup>·|ref| + 1e-6): 1× <span class=\"legend\"></span> ≥ 1000× (log scale). \
-A pixel is excused only when our own renderer, traced again within 1e-3 pixel of the centre (or 1e-2 across a discontinuity), takes \
-the reference's value; at most {:.2} % of pixels may be excused. Mitsuba scenes: the z image shows per-pixel z of the two-sample \
-test, grey up to 2, <span class=\"sw\" style=\"background:rgb(255,160,0)\"></span> orange above, \
-<span class=\"sw\" style=\"background:rgb(230,0,0)\"></span> red past the Šidák threshold. \
-See conformance/docs/tolerances.md, mitsuba.md and workflows.md.</p>",
-        SILHOUETTE_BUDGET * 100.0
-    )?;
+Workflows (regenerate, review, waive): conformance/docs/workflows.md.</p>\n",
+    );
+    for r in registry.iter() {
+        writeln!(html, "<p>{}</p>", r.legend())?;
+    }
     // Scenes.
     html.push_str("<h2>Scenes</h2>\n<table><tr><th>scene</th><th>ours (hover: reference)</th><th>difference / z</th><th>verdict and metrics</th></tr>\n");
     for j in &sorted {
         scene_row(&mut html, dir, j)?;
     }
     html.push_str("</table>\n");
-    plots::plots(&mut html, dir, &data)?;
+    plots::plots(&mut html, dir, &data, registry)?;
     html.push_str(SCRIPT);
     html.push_str("</body></html>\n");
     let index = dir.join("index.html");
@@ -156,9 +151,55 @@ fn metrics_html(metrics: &str) -> String {
         .join("<br>")
 }
 
+/// The section of the scenes that more than one reference checks: a column per
+/// reference, and the pairs that disagree (one passes where another fails).
+fn several(html: &mut String, judged: &[Judged], registry: &Registry) -> Result<()> {
+    let scenes: Vec<_> = by_scene(judged)
+        .into_iter()
+        .filter(|s| s.verdicts.len() > 1)
+        .collect();
+    html.push_str("<h2 id=\"by-scene\">Verdicts by scene</h2>\n");
+    if scenes.is_empty() {
+        html.push_str("<p>No scene of this run is checked by more than one reference.</p>\n");
+        return Ok(());
+    }
+    let names = registry.names();
+    html.push_str("<table><tr><th>scene</th>");
+    for n in &names {
+        write!(html, "<th>{n}</th>")?;
+    }
+    html.push_str("<th>agreement</th></tr>\n");
+    for s in &scenes {
+        write!(html, "<tr><td>{}/{}</td>", s.catalog, s.scene)?;
+        for n in &names {
+            match s.verdicts.iter().find(|(r, _)| r == n) {
+                Some((_, v)) => write!(html, "<td class=\"{}\">{v}</td>", count_class(*v, 1))?,
+                None => html.push_str("<td>—</td>"),
+            }
+        }
+        let d = s.disagreements();
+        if d.is_empty() {
+            html.push_str("<td>agree</td></tr>\n");
+        } else {
+            let pairs: Vec<String> = d
+                .iter()
+                .map(|(a, b)| format!("{a} and {b} disagree"))
+                .collect();
+            writeln!(
+                html,
+                "<td class=\"fail\">{}</td></tr>",
+                html_escape(&pairs.join("; "))
+            )?;
+        }
+    }
+    html.push_str("</table>\n");
+    Ok(())
+}
+
 fn scene_row(html: &mut String, dir: &Path, j: &Judged) -> Result<()> {
     let (scene, reference) = (j.checked.scene(), j.checked.reference());
-    let sub = dir.join(scene);
+    let key = j.key();
+    let sub = dir.join(&key);
     std::fs::create_dir_all(&sub)?;
     let ours = j.checked.ours();
     let (w, h) = (ours.width, ours.height);
@@ -166,20 +207,10 @@ fn scene_row(html: &mut String, dir: &Path, j: &Judged) -> Result<()> {
     let mut third = None;
     if let Some(r) = j.checked.reference_rgb() {
         save_png(&sub.join("reference.png"), w, h, srgb(w, h, r))?;
-        match &j.checked {
-            Checked::Povray(o) => {
-                if let Some(c) = &o.cmp {
-                    save_png(&sub.join("diff.png"), w, h, diff_image(c, &ours.rgb, r))?;
-                    third = Some("diff.png");
-                }
-            }
-            Checked::Mitsuba(o) => {
-                if let Some(rad) = &o.radiance {
-                    let alpha = crate::mitsuba::stats::sidak_alpha((w * h) as usize);
-                    save_png(&sub.join("z.png"), w, h, z_image(&rad.z_max, alpha))?;
-                    third = Some("z.png");
-                }
-            }
+        if let Some(f) = j.checked.figure() {
+            let file = format!("{}.png", f.name);
+            save_png(&sub.join(&file), w, h, f.png)?;
+            third = Some(file);
         }
     }
     let class = match (j.accepted(), j.verdict) {
@@ -190,13 +221,13 @@ fn scene_row(html: &mut String, dir: &Path, j: &Judged) -> Result<()> {
     let row_class = if j.accepted() { "ok" } else { "attention" };
     let images = if j.checked.reference_rgb().is_some() {
         format!(
-            "<div class=\"swap\" title=\"hover or click: the reference\"><img src=\"{scene}/ours.png\" alt=\"ours\"><img class=\"ref\" src=\"{scene}/reference.png\" alt=\"reference\"></div>"
+            "<div class=\"swap\" title=\"hover or click: the reference\"><img src=\"{key}/ours.png\" alt=\"ours\"><img class=\"ref\" src=\"{key}/reference.png\" alt=\"reference\"></div>"
         )
     } else {
-        format!("<img src=\"{scene}/ours.png\" alt=\"ours\">")
+        format!("<img src=\"{key}/ours.png\" alt=\"ours\">")
     };
     let third = third.map_or("—".to_string(), |f| {
-        format!("<img src=\"{scene}/{f}\" alt=\"{f}\">")
+        format!("<img src=\"{key}/{f}\" alt=\"{f}\">")
     });
     let mut notes = String::new();
     for wv in &j.waived {
@@ -218,7 +249,7 @@ fn scene_row(html: &mut String, dir: &Path, j: &Judged) -> Result<()> {
     };
     writeln!(
         html,
-        "<tr id=\"{scene}\" class=\"{row_class}\"><td><a href=\"#{scene}\">{scene}</a><br>{reference}<br>{w}×{h}, rendered in {:.3} s</td><td>{images}</td><td>{third}</td><td><span class=\"{class}\">{}</span> against {reference}{fix}{notes}<br>{}</td></tr>",
+        "<tr id=\"{key}\" class=\"{row_class}\"><td><a href=\"#{key}\">{scene}</a><br>{reference}<br>{w}×{h}, rendered in {:.3} s</td><td>{images}</td><td>{third}</td><td><span class=\"{class}\">{}</span> against {reference}{fix}{notes}<br>{}</td></tr>",
         j.checked.seconds(),
         html_escape(&shown_verdict(j)),
         metrics_html(&j.checked.metrics())

@@ -4,14 +4,19 @@
 use super::chart::bar_chart;
 use super::html::html_escape;
 use super::results::{utc, Results, Row};
-use crate::gate::REFERENCES;
+use crate::registry::Registry;
 use anyhow::Result;
 use std::fmt::Write;
 use std::path::Path;
 
 /// Plots from data on disk: this run's `results.json`, and (when present) the
 /// instruction counts and the speed/accuracy trade their scripts leave in `dir`.
-pub(super) fn plots(html: &mut String, dir: &Path, fallback: &Results) -> Result<()> {
+pub(super) fn plots(
+    html: &mut String,
+    dir: &Path,
+    fallback: &Results,
+    registry: &Registry,
+) -> Result<()> {
     html.push_str("<h2 id=\"plots\">Plots</h2>\n");
     let data: Results = std::fs::read_to_string(dir.join("results.json"))
         .ok()
@@ -21,28 +26,18 @@ pub(super) fn plots(html: &mut String, dir: &Path, fallback: &Results) -> Result
         "From results.json: measured {} by {}.",
         data.measured, data.how
     );
-    for reference in REFERENCES {
+    for r in registry.iter() {
+        let reference = r.name();
         let rows: Vec<&Row> = data
             .rows
             .iter()
-            .filter(|r| r.reference == reference)
+            .filter(|row| row.reference == reference)
             .collect();
         if rows.is_empty() {
             continue;
         }
-        let (title, label, mark) = if reference == "povray" {
-            (
-                "Largest pixel error per scene, in tolerances (POV-Ray)",
-                "largest |ours − reference| / tolerance (log)",
-                Some((1.0, "tolerance")),
-            )
-        } else {
-            (
-                "Largest per-pixel z per scene (Mitsuba)",
-                "largest z over pixels and channels (log)",
-                None,
-            )
-        };
+        let plot = r.worst_plot();
+        let (title, label, mark) = (plot.title, plot.label, plot.mark);
         let worst: Vec<(String, f64)> = rows.iter().map(|r| (r.scene.clone(), r.worst)).collect();
         let time: Vec<(String, f64)> = rows.iter().map(|r| (r.scene.clone(), r.seconds)).collect();
         writeln!(

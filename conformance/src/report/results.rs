@@ -2,7 +2,8 @@
 //! written beside the report and plotted from disk, and the UTC time stamp they carry.
 
 use super::table::shown_verdict;
-use crate::gate::{error_in_tolerances, Checked, Judged};
+use crate::gate::Judged;
+use crate::registry::Registry;
 
 /// One scene's measurements, as `results.json` holds them.
 #[derive(serde::Serialize, serde::Deserialize, Clone, Debug)]
@@ -11,12 +12,15 @@ pub struct Row {
     pub reference: String,
     /// The scene.
     pub scene: String,
+    /// Its row's anchor in `index.html` ([`Judged::key`]).
+    #[serde(default)]
+    pub anchor: String,
     /// The verdict as shown.
     pub verdict: String,
     /// Seconds our render took.
     pub seconds: f64,
-    /// Largest pixel error in units of the tolerance (POV-Ray), or largest per-pixel z
-    /// (Mitsuba).
+    /// The comparison's worst score ([`crate::checked::Checked::worst_score`]): largest
+    /// pixel error in units of the tolerance (POV-Ray), or largest per-pixel z (Mitsuba).
     pub worst: f64,
 }
 
@@ -51,37 +55,26 @@ fn now_utc() -> String {
     utc(std::time::SystemTime::now())
 }
 
-pub(super) fn results(judged: &[Judged]) -> Results {
+pub(super) fn results(judged: &[Judged], registry: &Registry) -> Results {
     let rows = judged
         .iter()
-        .map(|j| {
-            let worst = match &j.checked {
-                Checked::Povray(o) => o.reference_rgb.as_ref().map_or(0.0, |r| {
-                    (0..r.len() / 3)
-                        .map(|k| error_in_tolerances(&o.ours.rgb, r, k))
-                        .fold(0.0, f64::max)
-                }),
-                Checked::Mitsuba(o) => o
-                    .radiance
-                    .as_ref()
-                    .map_or(0.0, |r| r.z_max.iter().copied().fold(0.0, f64::max)),
-            };
-            Row {
-                reference: j.checked.reference().into(),
-                scene: j.checked.scene().into(),
-                verdict: shown_verdict(j),
-                seconds: j.checked.seconds(),
-                worst,
-            }
+        .map(|j| Row {
+            reference: j.checked.reference().into(),
+            scene: j.checked.scene().into(),
+            anchor: j.key(),
+            verdict: shown_verdict(j),
+            seconds: j.checked.seconds(),
+            worst: j.checked.worst_score(),
         })
         .collect();
+    let how: Vec<String> = registry.iter().map(|r| r.how()).collect();
     Results {
         measured: now_utc(),
         how: format!(
-            "`conformance run`, {} build, {} threads, pixel centres (POV-Ray) / {} spp (Mitsuba)",
+            "`conformance run`, {} build, {} threads, {}",
             if cfg!(feature = "f64") { "f64" } else { "f32" },
             std::thread::available_parallelism().map_or(1, |n| n.get()),
-            crate::mitsuba::harness::GATE_SPP
+            how.join(" / ")
         ),
         rows,
     }

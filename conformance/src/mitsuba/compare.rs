@@ -338,7 +338,7 @@ mod tests {
         assert!(
             (t.rmse - want).abs() < 1e-12,
             "rmse {} (want {want}: the squared differences are averaged over 4 pixels × 3 \
-             channels; radiance_test in conformance/src/mitsuba/stats.rs)",
+             channels; radiance_test in conformance/src/mitsuba/compare.rs)",
             t.rmse
         );
     }
