@@ -10,9 +10,10 @@ PyPI `bpy==5.0.1`; scripts/regen-cycles.sh installs it into a venv).
         multilayer EXR whose AOVs `ng` (outward geometric normal: True Normal times
         1 - 2 Backfacing) and `pos` (world position) are means over SPP samples, and whose
         Object Index (from the first sample) is 1 on every object.
-    cycles_refs.py radiance SCENE.json OUT.exr SPP SEED
-        One render with a box pixel filter one pixel wide, SPP samples, the given seed; the
-        EXR's Combined pass is the mean radiance (linear Rec.709, Standard view transform).
+    cycles_refs.py radiance SCENE.json PREFIX SPP SEEDS
+        SEEDS renders with a box pixel filter one pixel wide, SPP samples each, seeds 0 to
+        SEEDS - 1, written to PREFIX.seed<k>.exr; each EXR's Combined pass is that seed's
+        mean radiance (linear Rec.709, Standard view transform).
     cycles_refs.py version
 """
 import json
@@ -192,6 +193,19 @@ def material(index, m, aov_normal):
     return mat
 
 
+def place(scene, obj, values):
+    """Places `obj` by a full affine matrix. Assigning `matrix_world` would decompose it
+    into location, rotation and scale and lose any shear; the parent inverse matrix keeps
+    all 16 numbers, and world = parent (identity) @ parent inverse @ basis (identity)."""
+    root = scene.get("root")
+    if root is None:
+        root = bpy.data.objects.new("root", None)
+        scene.collection.objects.link(root)
+        scene["root"] = root
+    obj.parent = root
+    obj.matrix_parent_inverse = matrix(values)
+
+
 def objects(scene, desc, materials):
     for k, o in enumerate(desc["objects"]):
         name = f"o{k}"
@@ -213,6 +227,21 @@ def objects(scene, desc, materials):
                 mesh.shade_flat()
             mesh.validate()
             data = mesh
+        elif shape == "icosphere":
+            # Blender's icosphere of radius 1 (vertices on the sphere), shaded with the
+            # radial direction at each vertex: the interpolated normal of a point on a face
+            # is then the direction of that point from the centre.
+            import bmesh
+
+            data = bpy.data.meshes.new(name)
+            bm = bmesh.new()
+            bmesh.ops.create_icosphere(bm, subdivisions=o["subdivisions"], radius=1.0)
+            bm.to_mesh(data)
+            bm.free()
+            data.shade_smooth()
+            data.normals_split_custom_set_from_vertices(
+                [v.co.normalized() for v in data.vertices]
+            )
         elif shape == "sphere":
             # One vertex turned into one point of radius 1 by geometry nodes (Mesh to
             # Points): Cycles intersects a point cloud's points as exact spheres.
@@ -227,13 +256,18 @@ def objects(scene, desc, materials):
         data.materials.append(materials[key])
         obj = bpy.data.objects.new(name, data)
         if shape == "sphere":
-            points(obj, materials[key])
-        obj.matrix_world = matrix(o["matrix"])
+            points(obj, materials[key], o.get("instanced", False))
+        place(scene, obj, o["matrix"])
         obj.pass_index = 1
+        # Cycles moves shadow rays off smooth-shaded low-poly surfaces by default
+        # (shadow terminator geometry offset 0.1), a deliberate bias: off.
+        obj.shadow_terminator_geometry_offset = 0.0
+        obj.shadow_terminator_shading_offset = 0.0
+        obj.shadow_terminator_normal_offset = 0.0
         scene.collection.objects.link(obj)
 
 
-def points(obj, mat):
+def points(obj, mat, instanced):
     group = bpy.data.node_groups.new(obj.name + "-points", "GeometryNodeTree")
     group.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
     group.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
@@ -247,7 +281,35 @@ def points(obj, mat):
     set_mat.inputs["Material"].default_value = mat
     group.links.new(gin.outputs[0], to_points.inputs["Mesh"])
     group.links.new(to_points.outputs["Points"], set_mat.inputs["Geometry"])
-    group.links.new(set_mat.outputs["Geometry"], gout.inputs[0])
+    if not instanced:
+        group.links.new(set_mat.outputs["Geometry"], gout.inputs[0])
+    else:
+        # Cycles bakes the transform of a geometry with one user into it, and bakes a
+        # point's radius by the cube root of the determinant: a sphere again, not an
+        # ellipsoid (intern/cycles/scene/pointcloud.cpp, apply_transform). A geometry
+        # with two users keeps its object transform, and rays are mapped into object
+        # space. So the point is instanced twice: once as itself, once 1e-6 its size
+        # 1e6 radii away, which no ray meets.
+        to_inst = nodes.new("GeometryNodeGeometryToInstance")
+        dup = nodes.new("GeometryNodeDuplicateElements")
+        dup.domain = "INSTANCE"
+        dup.inputs["Amount"].default_value = 2
+        second = nodes.new("FunctionNodeCompare")
+        second.data_type = "INT"
+        second.operation = "EQUAL"
+        second.inputs[3].default_value = 1
+        move = nodes.new("GeometryNodeTranslateInstances")
+        move.inputs["Translation"].default_value = (0.0, 0.0, 1e6)
+        shrink = nodes.new("GeometryNodeScaleInstances")
+        shrink.inputs["Scale"].default_value = (1e-6, 1e-6, 1e-6)
+        group.links.new(set_mat.outputs["Geometry"], to_inst.inputs[0])
+        group.links.new(to_inst.outputs[0], dup.inputs["Geometry"])
+        group.links.new(dup.outputs["Duplicate Index"], second.inputs[2])
+        group.links.new(dup.outputs["Geometry"], move.inputs["Instances"])
+        group.links.new(second.outputs[0], move.inputs["Selection"])
+        group.links.new(move.outputs[0], shrink.inputs["Instances"])
+        group.links.new(second.outputs[0], shrink.inputs["Selection"])
+        group.links.new(shrink.outputs[0], gout.inputs[0])
     mod = obj.modifiers.new("points", "NODES")
     mod.node_group = group
 
@@ -302,7 +364,10 @@ if __name__ == "__main__":
     if cmd == "geometry" and len(sys.argv) == 5:
         render(build(sys.argv[2], "geometry", int(sys.argv[4]), 0), sys.argv[3])
     elif cmd == "radiance" and len(sys.argv) == 6:
-        render(build(sys.argv[2], "radiance", int(sys.argv[4]), int(sys.argv[5])), sys.argv[3])
+        scene = build(sys.argv[2], "radiance", int(sys.argv[4]), 0)
+        for seed in range(int(sys.argv[5])):
+            scene.cycles.seed = seed
+            render(scene, f"{sys.argv[3]}.seed{seed}.exr")
     elif cmd == "version":
         print(bpy.app.version_string)
     else:

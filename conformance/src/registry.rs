@@ -10,7 +10,11 @@ use anyhow::{Context, Result};
 
 /// The references of this repository, one line each, in the order the report and the
 /// gate list them.
-pub static COMMITTED: [&dyn Reference; 2] = [&crate::povray::PovRay, &crate::mitsuba::Mitsuba];
+pub static COMMITTED: [&dyn Reference; 3] = [
+    &crate::povray::PovRay,
+    &crate::mitsuba::Mitsuba,
+    &crate::cycles::Cycles,
+];
 
 /// A set of references with distinct names.
 #[derive(Clone, Debug)]

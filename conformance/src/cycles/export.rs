@@ -12,7 +12,8 @@
 //!
 //! | renderer | Blender / Cycles |
 //! |---|---|
-//! | sphere | a one-point point cloud of radius 1, which Cycles intersects as an exact sphere |
+//! | sphere | a one-point point cloud of radius 1, which Cycles intersects as an exact sphere (from outside only) |
+//! | dielectric sphere | an icosphere of [`ICOSPHERE_SUBDIVISIONS`] with radial vertex normals (approximate) |
 //! | box, rectangle, triangle, mesh | triangle meshes with the same vertices (exact) |
 //! | disk | a fan of [`SEGMENTS`] triangles (approximate: the rim is a polygon) |
 //! | cylinder (and caps) | [`SEGMENTS`] quads with smooth normals (approximate) |
@@ -36,6 +37,11 @@ pub const WORLD: DMat3 = DMat3::from_cols(DVec3::X, DVec3::Z, DVec3::Y);
 /// Segments of a tessellated disk or cylinder. The polygon's rim lies within
 /// `1 − cos(π/N)` = 4.7e-6 of the radius inside the circle (conformance/docs/cycles.md).
 pub const SEGMENTS: usize = 1024;
+
+/// Blender's subdivisions of the icosphere that stands for a dielectric sphere (its count
+/// starts at 1, the icosahedron: 9 is 20 · 4⁸ = 1,310,720 triangles with edges of 0.0035
+/// to 0.0052 of the radius; a face lies within 4.4e-6 of the radius inside the sphere).
+pub const ICOSPHERE_SUBDIVISIONS: u32 = 9;
 
 /// Why a scene has no Cycles equivalent.
 #[derive(Debug, thiserror::Error)]
@@ -137,8 +143,7 @@ impl Exporter<'_> {
         if ((du - dv) / du).abs() > 1e-9 {
             return Err(ExportError::NonSquarePixels(du / dv));
         }
-        if (w.left + w.right).abs() > 1e-12 * width || (w.bottom + w.top).abs() > 1e-12 * height
-        {
+        if (w.left + w.right).abs() > 1e-12 * width || (w.bottom + w.top).abs() > 1e-12 * height {
             return Err(ExportError::OffCentre);
         }
         let [u, v, n] = cam.basis64;
@@ -262,8 +267,23 @@ impl Exporter<'_> {
                 } else {
                     placed
                 };
+                if self.scene.material(material).model == MaterialModel::Dielectric {
+                    // Cycles culls a point's back face (kernel/geom/point_intersect.h:
+                    // "Always back-face culling for now"), so a ray inside never leaves a
+                    // point-cloud sphere. A dielectric sphere is an icosphere mesh instead,
+                    // its vertex normals the radial directions (conformance/docs/cycles.md).
+                    self.objects.push(json!({
+                        "shape": "icosphere", "subdivisions": ICOSPHERE_SUBDIVISIONS,
+                        "matrix": matrix(&m), "material": mat, "aov_normal": "shading",
+                    }));
+                    return Ok(());
+                }
+                // Cycles bakes a one-user point cloud's transform into a sphere; any other
+                // transform than a similarity needs the point instanced (cycles_refs.py).
+                let instanced = !similar(&m.m);
                 self.objects.push(json!({
                     "shape": "sphere", "matrix": matrix(&m), "material": mat,
+                    "instanced": instanced,
                 }));
             }
             Shape::Cube => self.mesh(&placed, mat, &box_mesh(), None),
@@ -311,7 +331,8 @@ impl Exporter<'_> {
         (p, t): &(Vec<DVec3>, Vec<[u32; 3]>),
         normals: Option<&[DVec3]>,
     ) {
-        let flat = |v: &[DVec3]| Value::Array(v.iter().flat_map(|x| [f(x.x), f(x.y), f(x.z)]).collect());
+        let flat =
+            |v: &[DVec3]| Value::Array(v.iter().flat_map(|x| [f(x.x), f(x.y), f(x.z)]).collect());
         self.objects.push(json!({
             "shape": "mesh",
             "matrix": matrix(to_world),
@@ -321,6 +342,15 @@ impl Exporter<'_> {
             "normals": normals.map(flat),
         }));
     }
+}
+
+/// Whether a linear map is a similarity (orthogonal columns of equal length).
+fn similar(m: &DMat3) -> bool {
+    let c = [m.x_axis, m.y_axis, m.z_axis];
+    let l0 = c[0].length_squared();
+    c.iter()
+        .all(|x| ((x.length_squared() - l0) / l0).abs() < 1e-9)
+        && (0..3).all(|i| (i + 1..3).all(|j| (c[i].dot(c[j]) / l0).abs() < 1e-9))
 }
 
 type TriMesh = (Vec<DVec3>, Vec<[u32; 3]>);
@@ -369,7 +399,10 @@ fn rectangle_mesh() -> TriMesh {
         DVec3::new(1.0, 0.0, 1.0),
         DVec3::new(-1.0, 0.0, 1.0),
     ];
-    let t = vec![wound(&p, [0, 1, 2], DVec3::Y), wound(&p, [0, 2, 3], DVec3::Y)];
+    let t = vec![
+        wound(&p, [0, 1, 2], DVec3::Y),
+        wound(&p, [0, 2, 3], DVec3::Y),
+    ];
     (p, t)
 }
 
@@ -437,7 +470,12 @@ mod tests {
         for tri in &t {
             let [a, b, c] = tri.map(|i| p[i as usize]);
             let centre = (a + b + c) / 3.0;
-            assert!((b - a).cross(c - a).dot(DVec3::new(centre.x, 0.0, centre.z)) > 0.0);
+            assert!(
+                (b - a)
+                    .cross(c - a)
+                    .dot(DVec3::new(centre.x, 0.0, centre.z))
+                    > 0.0
+            );
         }
     }
 }

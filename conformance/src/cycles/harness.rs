@@ -3,15 +3,14 @@
 //! seed variance of the reference), with the same tests and tolerances as Mitsuba's
 //! (`crate::mitsuba::compare`).
 
+use super::outcome::Outcome;
 use super::refgen::export_text;
 use super::refs::read_radiance;
 use crate::catalog::{load, repo_root, Entry};
-use crate::manifest::{freshness, Freshness, Manifest};
-use super::outcome::Outcome;
-use crate::mitsuba::harness::{our_geometry, read_geometry, render_estimate};
+use crate::manifest::{freshness, Manifest};
+use crate::mitsuba::compare::{radiance_test, Estimate, RadianceTest};
+use crate::mitsuba::harness::{compared, read_geometry, render_estimate, Render};
 use crate::mitsuba::outcome::Outcome as Measured;
-use crate::mitsuba::compare::{geometry_test, radiance_test, Estimate};
-use crate::verdict::Verdict;
 use anyhow::{Context, Result};
 use renderer::physical::Fault;
 
@@ -37,15 +36,10 @@ pub fn check(
         .reference
         .get(&format!("cycles-geometry/{}", entry.name));
     let (Some(rad), Some(geo)) = (rad, geo) else {
-        return Ok(Outcome(Measured {
-            scene: entry.name.clone(),
-            verdict: Verdict::Missing,
-            geometry: None,
-            radiance: None,
-            ours,
-            reference_rgb: None,
-            seconds,
-        }));
+        return Ok(Outcome {
+            references: None,
+            measured: Measured::missing(&entry.name, ours, seconds),
+        });
     };
     let n = rad.spp.context("a Cycles radiance record has spp")?;
     let json = export_text(&scene)?;
@@ -56,34 +50,38 @@ pub fn check(
     let dir = repo_root().join("references");
     let (ref_rgb, ref_est) = read_radiance(&dir.join(&rad.file), n)?;
     let ref_geo = read_geometry(&dir.join(&geo.file))?;
-    let size = (ours.width as usize, ours.height as usize);
-    anyhow::ensure!(
-        ref_est.size == size && ref_geo.size == size,
-        "{}: reference size differs from the render",
-        entry.name
-    );
-    let est = Estimate::from_rgb_moments(
-        size,
-        &ours.rgb,
-        ours.moments.as_ref().expect("moments"),
-        spp,
-    );
-    let radiance = radiance_test(&est, &ref_est);
-    let geometry = geometry_test(&our_geometry(&ours), &ref_geo);
-    let verdict = if fresh.contains(&Freshness::Stale) {
-        Verdict::Stale
-    } else if radiance.passed() && geometry.passed() {
-        Verdict::Pass
-    } else {
-        Verdict::Fail
+    let references = references_agree(entry, manifest, &ref_est)?;
+    let measured = compared(
+        &entry.name,
+        Render { ours, spp, seconds },
+        &fresh,
+        (ref_rgb, ref_est, ref_geo),
+    )?;
+    Ok(Outcome {
+        measured,
+        references,
+    })
+}
+
+/// Mitsuba's radiance reference of the scene against Cycles' `cycles` (both are estimates
+/// with a variance, so the two-sample test applies as it does to ours), when Mitsuba has
+/// one. The third side of the three-way verdict: when the two references disagree beyond
+/// their noise, conformance/docs/cycles.md says which one we side with and why.
+pub fn references_agree(
+    entry: &Entry,
+    manifest: &Manifest,
+    cycles: &Estimate,
+) -> Result<Option<RadianceTest>> {
+    let Some(rec) = manifest.reference.get(&format!("mitsuba/{}", entry.name)) else {
+        return Ok(None);
     };
-    Ok(Outcome(Measured {
-        scene: entry.name.clone(),
-        verdict,
-        geometry: Some(geometry),
-        radiance: Some(radiance),
-        ours,
-        reference_rgb: Some(ref_rgb),
-        seconds,
-    }))
+    let spp = rec.spp.context("a Mitsuba radiance record has spp")?;
+    let (_, mitsuba) = crate::mitsuba::harness::read_radiance(
+        &repo_root().join("references").join(&rec.file),
+        spp,
+    )?;
+    if mitsuba.size != cycles.size {
+        return Ok(None);
+    }
+    Ok(Some(radiance_test(&mitsuba, cycles)))
 }

@@ -5,8 +5,8 @@
 use super::refs::{combine_seeds, read_geometry_render, read_seed, write_geometry, write_radiance};
 use crate::catalog::{load, repo_root, scratch_dir, Entry};
 use crate::manifest::{sha256, today, Manifest, Record};
-use crate::mitsuba::harness::read_geometry;
 use crate::mitsuba::compare::{geometry_test, radiance_test};
+use crate::mitsuba::harness::read_geometry;
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -16,7 +16,7 @@ pub const SEEDS: u32 = 16;
 /// Samples per pixel of each seed (K · S = 8192, the Mitsuba references' count).
 pub const SEED_SPP: u32 = 512;
 /// Samples per pixel of the geometry render (pixel filter 0.01 px wide).
-pub const GEOMETRY_SPP: u32 = 64;
+pub const GEOMETRY_SPP: u32 = 1;
 
 /// The Python that has `bpy`: `$CYCLES_PYTHON`, else the venv scripts/regen-cycles.sh
 /// makes (`target/cycles-venv`).
@@ -86,18 +86,17 @@ pub fn render_cycles(entry: &Entry, out_dir: &Path, version: &str) -> Result<(Re
         geo_raw.clone(),
         GEOMETRY_SPP.to_string(),
     ])?;
+    run(&[
+        "radiance".into(),
+        json_name.clone(),
+        entry.name.clone(),
+        SEED_SPP.to_string(),
+        SEEDS.to_string(),
+    ])?;
     let mut seeds = Vec::new();
     let mut size = (0, 0);
     for seed in 0..SEEDS {
-        let file = format!("{}.seed{seed}.exr", entry.name);
-        run(&[
-            "radiance".into(),
-            json_name.clone(),
-            file.clone(),
-            SEED_SPP.to_string(),
-            seed.to_string(),
-        ])?;
-        let (s, rgb) = read_seed(&work.join(&file))?;
+        let (s, rgb) = read_seed(&work.join(format!("{}.seed{seed}.exr", entry.name)))?;
         size = s;
         seeds.push(rgb);
     }
@@ -128,8 +127,9 @@ pub fn render_cycles(entry: &Entry, out_dir: &Path, version: &str) -> Result<(Re
     Ok((
         record(
             format!(
-                "python scripts/cycles_refs.py radiance {json_name} SEED.exr {SEED_SPP} SEED, \
-                 SEED = 0..{SEEDS}, combined by conformance::cycles::refs"
+                "python scripts/cycles_refs.py radiance {json_name} {} {SEED_SPP} {SEEDS}, \
+                 the seeds combined by conformance::cycles::refs",
+                entry.name
             ),
             format!("cycles/{rad_file}"),
             Some(SEEDS * SEED_SPP),

@@ -37,9 +37,57 @@ fn channel<'a>(e: &'a ExrImage, path: &Path, name: &str) -> Result<&'a [f32]> {
     })
 }
 
+/// Reads every part of a multipart EXR (Blender writes each pass of a multilayer EXR as
+/// its own part) as one image whose channels are named `<part>.<channel>`, the names
+/// Blender gives them (`ViewLayer.Combined.R`).
+pub fn read_blender_exr(path: &Path) -> Result<ExrImage> {
+    use exr::prelude::*;
+    let img = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .with_context(|| format!("cannot read {}", path.display()))?;
+    let mut out = ExrImage {
+        width: 0,
+        height: 0,
+        channels: Vec::new(),
+    };
+    for layer in &img.layer_data {
+        let size = layer.size;
+        if out.channels.is_empty() {
+            (out.width, out.height) = (size.0, size.1);
+        }
+        ensure!(
+            (size.0, size.1) == (out.width, out.height),
+            "{}: its parts differ in size",
+            path.display()
+        );
+        let part = layer
+            .attributes
+            .layer_name
+            .as_ref()
+            .map(|n| n.to_string())
+            .unwrap_or_default();
+        for c in &layer.channel_data.list {
+            let name = c.name.to_string();
+            let full = if part.is_empty() || name.starts_with(&format!("{part}.")) {
+                name
+            } else {
+                format!("{part}.{name}")
+            };
+            out.channels
+                .push((full, c.sample_data.values_as_f32().collect()));
+        }
+    }
+    Ok(out)
+}
+
 /// One seed's radiance render: its RGB mean per pixel (3 per pixel).
 pub fn read_seed(path: &Path) -> Result<((usize, usize), Vec<f64>)> {
-    let e = read_exr(path)?;
+    let e = read_blender_exr(path)?;
     let c = ["R", "G", "B"].map(|k| format!("{LAYER}.Combined.{k}"));
     let (r, g, b) = (
         channel(&e, path, &c[0])?,
@@ -97,12 +145,8 @@ pub fn combine_seeds(
 /// The geometry render: outward normal and position AOVs (means over the samples, all
 /// within 0.005 px of the pixel centre) and the object index of the first sample, mapped
 /// back to our world by `world` (its own inverse). The distance is `|p − eye|`.
-pub fn read_geometry_render(
-    path: &Path,
-    world: glam::DMat3,
-    eye: DVec3,
-) -> Result<Geometry> {
-    let e = read_exr(path)?;
+pub fn read_geometry_render(path: &Path, world: glam::DMat3, eye: DVec3) -> Result<Geometry> {
+    let e = read_blender_exr(path)?;
     let get = |n: &str| channel(&e, path, &format!("{LAYER}.{n}"));
     let (nx, ny, nz) = (get("ng.R")?, get("ng.G")?, get("ng.B")?);
     let (px_, py, pz) = (get("pos.R")?, get("pos.G")?, get("pos.B")?);
@@ -130,7 +174,11 @@ pub fn read_geometry_render(
 
 /// Writes float channels (each `size.0 × size.1`, top row first) to an EXR, through a
 /// temporary file so that an existing file is only replaced by a complete one.
-pub fn write_channels(path: &Path, size: (usize, usize), channels: Vec<(String, Vec<f32>)>) -> Result<()> {
+pub fn write_channels(
+    path: &Path,
+    size: (usize, usize),
+    channels: Vec<(String, Vec<f32>)>,
+) -> Result<()> {
     use exr::prelude::*;
     let list: Vec<AnyChannel<FlatSamples>> = channels
         .into_iter()
@@ -224,7 +272,12 @@ mod tests {
         for (c, row) in SRGB_TO_XYZ.iter().enumerate() {
             let s: f64 = row.iter().sum();
             assert!((e.mean[c] - 0.2 * s).abs() < 1e-12);
-            assert!((e.var[c] - 0.08 * s * s).abs() < 1e-12, "{} vs {}", e.var[c], 0.08 * s * s);
+            assert!(
+                (e.var[c] - 0.08 * s * s).abs() < 1e-12,
+                "{} vs {}",
+                e.var[c],
+                0.08 * s * s
+            );
         }
         assert!(combine_seeds((1, 1), &seeds[..1], 4).is_err());
     }
