@@ -57,9 +57,21 @@ pub fn export_text(scene: &renderer::scene::Scene) -> Result<String> {
 /// Renders one scene's Cycles references into `out_dir` and returns their records
 /// (radiance, geometry).
 pub fn render_cycles(entry: &Entry, out_dir: &Path, version: &str) -> Result<(Record, Record)> {
+    let work = scratch_dir(&format!("cy-{}", entry.name))?;
+    // The scratch folder goes whether the render succeeds or not.
+    let result = render_in(entry, out_dir, version, &work);
+    std::fs::remove_dir_all(&work).ok();
+    result
+}
+
+fn render_in(
+    entry: &Entry,
+    out_dir: &Path,
+    version: &str,
+    work: &Path,
+) -> Result<(Record, Record)> {
     let (scene, text) = load(entry)?;
     let json = export_text(&scene)?;
-    let work = scratch_dir(&format!("cy-{}", entry.name))?;
     let json_name = format!("{}.json", entry.name);
     std::fs::write(work.join(&json_name), &json)?;
     let script = repo_root().join("scripts/cycles_refs.py");
@@ -67,7 +79,7 @@ pub fn render_cycles(entry: &Entry, out_dir: &Path, version: &str) -> Result<(Re
         let out = Command::new(python())
             .arg(&script)
             .args(args)
-            .current_dir(&work)
+            .current_dir(work)
             .output()?;
         if !out.status.success() {
             bail!(
@@ -113,7 +125,6 @@ pub fn render_cycles(entry: &Entry, out_dir: &Path, version: &str) -> Result<(Re
     );
     write_radiance(&out_dir.join(&rad_file), &rgb, &est)?;
     write_geometry(&out_dir.join(&geo_file), &geometry)?;
-    std::fs::remove_dir_all(&work).ok();
     let record = |command: String, file: String, spp: Option<u32>| Record {
         tool: "cycles".into(),
         version: version.into(),
@@ -166,10 +177,17 @@ pub fn regenerate(entries: &[Entry]) -> Result<()> {
 /// (both sides have a variance), and the manifest records (scene and export hashes,
 /// command). Returns the names that differ.
 pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
+    let tmp = scratch_dir("cy-check")?;
+    // The scratch folder goes whether the check succeeds or not.
+    let result = check_in(entries, &tmp);
+    std::fs::remove_dir_all(&tmp).ok();
+    result
+}
+
+fn check_in(entries: &[Entry], tmp: &Path) -> Result<Vec<String>> {
     let version = cycles_version()?;
     let root = repo_root();
     let manifest = Manifest::load(&root.join("references/manifest.toml"))?;
-    let tmp = scratch_dir("cy-check")?;
     let mut bad = Vec::new();
     for e in entries {
         let old = manifest
@@ -180,7 +198,7 @@ pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
             .reference
             .get(&format!("cycles-geometry/{}", e.name))
             .with_context(|| format!("no record cycles-geometry/{}", e.name))?;
-        let (rad, geo) = render_cycles(e, &tmp, &version)?;
+        let (rad, geo) = render_cycles(e, tmp, &version)?;
         let committed = root.join("references/cycles");
         let g = geometry_test(
             &read_geometry(&tmp.join(format!("{}.geom.exr", e.name)))?,
@@ -212,6 +230,5 @@ pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
             bad.push(e.name.clone());
         }
     }
-    std::fs::remove_dir_all(&tmp).ok();
     Ok(bad)
 }
