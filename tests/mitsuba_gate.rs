@@ -4,10 +4,12 @@
 //! and a half-pixel shift.
 
 use conformance::catalog::load;
-use conformance::catalog::{repo_root, scenes, Entry};
+use conformance::catalog::{edited_copy, repo_root, scenes, Entry};
 use conformance::manifest::Manifest;
 use conformance::mitsuba::compare::{radiance_test, Estimate, RadianceTest};
-use conformance::mitsuba::harness::{check, read_radiance, render_estimate, GATE_SPP};
+use conformance::mitsuba::harness::{
+    brighten_light, check, read_radiance, render_estimate, GATE_SPP,
+};
 use conformance::verdict::Verdict;
 use renderer::physical::Fault;
 use renderer::scene::Scene;
@@ -68,15 +70,8 @@ fn test02_catalog_covers_the_required_scenes() {
 
 #[test]
 fn test03_a_stale_mitsuba_reference_is_never_a_pass() {
-    let e = entry("mi_directional");
-    let text = std::fs::read_to_string(&e.path)
-        .unwrap()
-        .replace("[render]", "# edited\n[render]");
-    let dir = std::env::temp_dir().join(format!("gate-mi-stale-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("mi_directional.toml");
-    std::fs::write(&path, text).unwrap();
-    let o = check(&Entry { path, ..e.clone() }, &manifest(), 64, None).unwrap();
+    let (dir, copy) = edited_copy(&entry("mi_directional"), "gate-mi-stale").unwrap();
+    let o = check(&copy, &manifest(), 64, None).unwrap();
     assert_eq!(
         o.verdict,
         Verdict::Stale,
@@ -95,16 +90,7 @@ fn test04_a_light_two_percent_brighter_fails() {
             "{name}, before making its light 2 % brighter: the unmodified scene must pass its \
 statistical test (see `cargo test --test catalog {name}`)"
         );
-        if s.lights.is_empty() {
-            for m in s.materials.iter_mut() {
-                m.radiance *= 1.02;
-            }
-            for l in s.area_lights.iter_mut() {
-                l.radiance *= 1.02;
-            }
-        } else {
-            s.lights[0].color *= 1.02;
-        }
+        brighten_light(&mut s, 1.02);
         let r = against_reference(&s, name, None);
         eprintln!(
             "2 % brighter, {name}: {:.2} % pass, global z {:.1?}",

@@ -151,7 +151,7 @@ fn manifest() -> Manifest {
 #[test]
 fn test01_a_registered_reference_selects_the_scenes_it_covers() {
     let r = registry();
-    assert_eq!(r.names(), ["povray", "mitsuba", "oracle", "fake"]);
+    assert_eq!(r.names(), ["povray", "mitsuba", "oracle", "cycles", "fake"]);
     let mine = r.select("fake::").unwrap();
     assert!(!mine.is_empty());
     assert!(

@@ -173,6 +173,27 @@ pub fn scratch_dir(name: &str) -> Result<PathBuf> {
     Ok(d)
 }
 
+/// A copy of a catalog scene with a comment added before its `[render]` table, in a new
+/// folder of the system's temporary directory named by `tag` (the caller removes it): the
+/// same scene, but a file whose hash no longer matches its references' records, for the
+/// gates' "a stale reference is never a pass" tests.
+pub fn edited_copy(entry: &Entry, tag: &str) -> Result<(PathBuf, Entry)> {
+    let text = std::fs::read_to_string(&entry.path)
+        .with_context(|| format!("reading {}", entry.path.display()))?
+        .replace("[render]", "# edited\n[render]");
+    let dir = std::env::temp_dir().join(format!("{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir)?;
+    let path = dir.join(format!("{}.toml", entry.name));
+    std::fs::write(&path, text)?;
+    Ok((
+        dir,
+        Entry {
+            path,
+            ..entry.clone()
+        },
+    ))
+}
+
 /// Names of `candidates` close to `wanted` (a part of the name, or the whole name, within
 /// the edit distance `renderer::suggest` allows), best first: for "no scene matches"
 /// messages.

@@ -7,6 +7,7 @@
 
 pub mod catalog;
 pub mod checked;
+pub mod cycles;
 pub mod gate;
 pub mod images;
 pub mod manifest;

@@ -10,10 +10,11 @@ use anyhow::{Context, Result};
 
 /// The references of this repository, one line each, in the order the report and the
 /// gate list them.
-pub static COMMITTED: [&dyn Reference; 3] = [
+pub static COMMITTED: [&dyn Reference; 4] = [
     &crate::povray::PovRay,
     &crate::mitsuba::Mitsuba,
     &crate::oracle::ClosedForm,
+    &crate::cycles::Cycles,
 ];
 
 /// A set of references with distinct names.

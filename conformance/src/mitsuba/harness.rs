@@ -30,6 +30,23 @@ pub fn render_estimate(scene: &Scene, spp: u32, fault: Option<Fault>) -> Image {
     render(scene, &opts)
 }
 
+/// Makes a scene's light brighter by `factor`: its first light, or with no lights every
+/// emitting material (and the area lights built from them). The gates' perturbation tests
+/// (`tests/mitsuba_gate.rs`, `tests/cycles_gate.rs`) check that a light 2 % too bright
+/// fails.
+pub fn brighten_light(scene: &mut Scene, factor: f32) {
+    if scene.lights.is_empty() {
+        for m in scene.materials.iter_mut() {
+            m.radiance *= factor;
+        }
+        for l in scene.area_lights.iter_mut() {
+            l.radiance *= factor;
+        }
+    } else {
+        scene.lights[0].color *= factor;
+    }
+}
+
 /// Our geometry channels from the AOVs.
 pub fn our_geometry(img: &Image) -> Geometry {
     let a = img.aov.as_ref().expect("rendered with AOVs");
@@ -135,17 +152,8 @@ pub fn check(
     let geo = manifest
         .reference
         .get(&format!("mitsuba-geometry/{}", entry.name));
-    let missing = |ours| Outcome {
-        scene: entry.name.clone(),
-        verdict: Verdict::Missing,
-        geometry: None,
-        radiance: None,
-        ours,
-        reference_rgb: None,
-        seconds,
-    };
     let (Some(rad), Some(geo)) = (rad, geo) else {
-        return Ok(missing(ours));
+        return Ok(Outcome::missing(&entry.name, ours, seconds));
     };
     let ref_spp = rad.spp.context("a Mitsuba radiance record has spp")?;
     let xml = export_text(&scene, ref_spp)?;
@@ -156,11 +164,38 @@ pub fn check(
     let dir = repo_root().join("references");
     let (ref_rgb, ref_est) = read_radiance(&dir.join(&rad.file), ref_spp)?;
     let ref_geo = read_geometry(&dir.join(&geo.file))?;
+    compared(
+        &entry.name,
+        Render { ours, spp, seconds },
+        &fresh,
+        (ref_rgb, ref_est, ref_geo),
+    )
+}
+
+/// Our render for a comparison: the image, its samples per pixel, and the seconds it took.
+pub struct Render {
+    /// Our render (RGB mean, AOVs, moments).
+    pub ours: Image,
+    /// Its samples per pixel.
+    pub spp: u32,
+    /// Seconds it took.
+    pub seconds: f64,
+}
+
+/// The outcome of comparing our render with a radiance reference (RGB mean and XYZ
+/// estimate) and a geometry reference of a scene (`scene`), given the freshness of their
+/// records: what Mitsuba's `check` and Cycles' share.
+pub fn compared(
+    scene: &str,
+    render: Render,
+    fresh: &[Freshness],
+    (ref_rgb, ref_est, ref_geo): (Vec<f32>, Estimate, Geometry),
+) -> Result<Outcome> {
+    let Render { ours, spp, seconds } = render;
     let size = (ours.width as usize, ours.height as usize);
     anyhow::ensure!(
         ref_est.size == size && ref_geo.size == size,
-        "{}: reference size differs from the render",
-        entry.name
+        "{scene}: reference size differs from the render",
     );
     let est = Estimate::from_rgb_moments(
         size,
@@ -178,7 +213,7 @@ pub fn check(
         Verdict::Fail
     };
     Ok(Outcome {
-        scene: entry.name.clone(),
+        scene: scene.to_string(),
         verdict,
         geometry: Some(geometry),
         radiance: Some(radiance),

@@ -27,6 +27,21 @@ pub struct Outcome {
     pub seconds: f64,
 }
 
+impl Outcome {
+    /// A scene without references: our render alone, `Missing`.
+    pub fn missing(scene: &str, ours: Image, seconds: f64) -> Outcome {
+        Outcome {
+            scene: scene.to_string(),
+            verdict: Verdict::Missing,
+            geometry: None,
+            radiance: None,
+            ours,
+            reference_rgb: None,
+            seconds,
+        }
+    }
+}
+
 impl Checked for Outcome {
     fn reference(&self) -> &str {
         "mitsuba"
