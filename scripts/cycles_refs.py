@@ -256,7 +256,7 @@ def objects(scene, desc, materials):
         data.materials.append(materials[key])
         obj = bpy.data.objects.new(name, data)
         if shape == "sphere":
-            points(obj, materials[key], o.get("instanced", False))
+            points(obj, materials[key])
         place(scene, obj, o["matrix"])
         obj.pass_index = 1
         # Cycles moves shadow rays off smooth-shaded low-poly surfaces by default
@@ -267,7 +267,10 @@ def objects(scene, desc, materials):
         scene.collection.objects.link(obj)
 
 
-def points(obj, mat, instanced):
+def points(obj, mat):
+    # A sphere under a similarity only: Cycles bakes a one-user point's transform into
+    # its centre and radius (intern/cycles/scene/pointcloud.cpp, apply_transform), exact
+    # for a similarity; any other map is exported as an icosphere mesh (export.rs).
     group = bpy.data.node_groups.new(obj.name + "-points", "GeometryNodeTree")
     group.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
     group.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
@@ -281,35 +284,7 @@ def points(obj, mat, instanced):
     set_mat.inputs["Material"].default_value = mat
     group.links.new(gin.outputs[0], to_points.inputs["Mesh"])
     group.links.new(to_points.outputs["Points"], set_mat.inputs["Geometry"])
-    if not instanced:
-        group.links.new(set_mat.outputs["Geometry"], gout.inputs[0])
-    else:
-        # Cycles bakes the transform of a geometry with one user into it, and bakes a
-        # point's radius by the cube root of the determinant: a sphere again, not an
-        # ellipsoid (intern/cycles/scene/pointcloud.cpp, apply_transform). A geometry
-        # with two users keeps its object transform, and rays are mapped into object
-        # space. So the point is instanced twice: once as itself, once 1e-6 its size
-        # 1e6 radii away, which no ray meets.
-        to_inst = nodes.new("GeometryNodeGeometryToInstance")
-        dup = nodes.new("GeometryNodeDuplicateElements")
-        dup.domain = "INSTANCE"
-        dup.inputs["Amount"].default_value = 2
-        second = nodes.new("FunctionNodeCompare")
-        second.data_type = "INT"
-        second.operation = "EQUAL"
-        second.inputs[3].default_value = 1
-        move = nodes.new("GeometryNodeTranslateInstances")
-        move.inputs["Translation"].default_value = (0.0, 0.0, 1e6)
-        shrink = nodes.new("GeometryNodeScaleInstances")
-        shrink.inputs["Scale"].default_value = (1e-6, 1e-6, 1e-6)
-        group.links.new(set_mat.outputs["Geometry"], to_inst.inputs[0])
-        group.links.new(to_inst.outputs[0], dup.inputs["Geometry"])
-        group.links.new(dup.outputs["Duplicate Index"], second.inputs[2])
-        group.links.new(dup.outputs["Geometry"], move.inputs["Instances"])
-        group.links.new(second.outputs[0], move.inputs["Selection"])
-        group.links.new(move.outputs[0], shrink.inputs["Instances"])
-        group.links.new(second.outputs[0], shrink.inputs["Selection"])
-        group.links.new(shrink.outputs[0], gout.inputs[0])
+    group.links.new(set_mat.outputs["Geometry"], gout.inputs[0])
     mod = obj.modifiers.new("points", "NODES")
     mod.node_group = group
 

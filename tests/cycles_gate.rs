@@ -125,9 +125,9 @@ fn test04_a_missing_cosine_term_fails_against_cycles() {
 }
 
 /// The scenes whose Mitsuba and Cycles references disagree beyond their noise, each
-/// explained in conformance/docs/cycles.md ("The three-way verdict") and waived for Cycles
-/// in conformance/waivers.toml.
-const REFERENCES_DISAGREE: [&str; 2] = ["mi_ellipsoid", "mi_mesh"];
+/// explained in conformance/docs/cycles.md ("The three-way verdict"); ours passes against
+/// both there.
+const REFERENCES_DISAGREE: [&str; 1] = ["mi_mesh"];
 
 #[test]
 fn test05_mitsuba_and_cycles_references_agree_except_where_documented() {

@@ -12,8 +12,8 @@
 //!
 //! | renderer | Blender / Cycles |
 //! |---|---|
-//! | sphere | a one-point point cloud of radius 1, which Cycles intersects as an exact sphere (from outside only) |
-//! | dielectric sphere | an icosphere of [`ICOSPHERE_SUBDIVISIONS`] with radial vertex normals (approximate) |
+//! | sphere under a similarity | a one-point point cloud of radius 1, which Cycles intersects as an exact sphere (from outside only) |
+//! | dielectric sphere, or a sphere under any other map (an ellipsoid) | an icosphere of [`ICOSPHERE_SUBDIVISIONS`] with radial vertex normals (approximate) |
 //! | box, rectangle, triangle, mesh | triangle meshes with the same vertices (exact) |
 //! | disk | a fan of [`SEGMENTS`] triangles (approximate: the rim is a polygon) |
 //! | cylinder (and caps) | [`SEGMENTS`] quads with smooth normals (approximate) |
@@ -42,6 +42,13 @@ pub const SEGMENTS: usize = 1024;
 /// starts at 1, the icosahedron: 9 is 20 · 4⁸ = 1,310,720 triangles with edges of 0.0035
 /// to 0.0052 of the radius; a face lies within 4.4e-6 of the radius inside the sphere).
 pub const ICOSPHERE_SUBDIVISIONS: u32 = 9;
+
+/// The icosphere's subdivisions for a sphere under a map that is not a similarity (an
+/// ellipsoid): 10, 5,242,880 triangles, a face within 1.1e-6 of the radius. The map
+/// stretches the faces' sag along its longest axis, and a ray that meets the stretched
+/// surface at a grazing angle sees the sag divided by the cosine: at 9 subdivisions one
+/// pixel of `mi_ellipsoid` was 2.5e-5 off in distance, beyond the gate's 2e-5.
+pub const ELLIPSOID_SUBDIVISIONS: u32 = 10;
 
 /// Why a scene has no Cycles equivalent.
 #[derive(Debug, thiserror::Error)]
@@ -267,23 +274,30 @@ impl Exporter<'_> {
                 } else {
                     placed
                 };
-                if self.scene.material(material).model == MaterialModel::Dielectric {
-                    // Cycles culls a point's back face (kernel/geom/point_intersect.h:
-                    // "Always back-face culling for now"), so a ray inside never leaves a
-                    // point-cloud sphere. A dielectric sphere is an icosphere mesh instead,
-                    // its vertex normals the radial directions (conformance/docs/cycles.md).
+                // Cycles culls a point's back face (kernel/geom/point_intersect.h:
+                // "Always back-face culling for now"), so a ray inside never leaves a
+                // point-cloud sphere; and it bakes a one-user point's transform into a
+                // sphere, while an instanced point's normal comes out by M, not M⁻ᵀ
+                // (conformance/docs/cycles.md, "A point under a non-similarity"). A
+                // dielectric sphere, and a sphere under any map but a similarity (an
+                // ellipsoid), is an icosphere mesh instead, its vertex normals the radial
+                // directions, which Cycles maps as a mesh's: by M⁻ᵀ.
+                let ellipsoid = !similar(&m.m);
+                if self.scene.material(material).model == MaterialModel::Dielectric || ellipsoid
+                {
+                    let subdivisions = if ellipsoid {
+                        ELLIPSOID_SUBDIVISIONS
+                    } else {
+                        ICOSPHERE_SUBDIVISIONS
+                    };
                     self.objects.push(json!({
-                        "shape": "icosphere", "subdivisions": ICOSPHERE_SUBDIVISIONS,
+                        "shape": "icosphere", "subdivisions": subdivisions,
                         "matrix": matrix(&m), "material": mat, "aov_normal": "shading",
                     }));
                     return Ok(());
                 }
-                // Cycles bakes a one-user point cloud's transform into a sphere; any other
-                // transform than a similarity needs the point instanced (cycles_refs.py).
-                let instanced = !similar(&m.m);
                 self.objects.push(json!({
                     "shape": "sphere", "matrix": matrix(&m), "material": mat,
-                    "instanced": instanced,
                 }));
             }
             Shape::Cube => self.mesh(&placed, mat, &box_mesh(), None),
