@@ -283,8 +283,7 @@ impl Exporter<'_> {
                 // ellipsoid), is an icosphere mesh instead, its vertex normals the radial
                 // directions, which Cycles maps as a mesh's: by M⁻ᵀ.
                 let ellipsoid = !similar(&m.m);
-                if self.scene.material(material).model == MaterialModel::Dielectric || ellipsoid
-                {
+                if self.scene.material(material).model == MaterialModel::Dielectric || ellipsoid {
                     let subdivisions = if ellipsoid {
                         ELLIPSOID_SUBDIVISIONS
                     } else {
