@@ -5,7 +5,9 @@
 //! conformance/docs/cycles.md says they do.
 
 use conformance::catalog::{edited_copy, load, repo_root, scenes, Entry};
+use conformance::checked::Checked;
 use conformance::cycles::harness::check;
+use conformance::cycles::outcome::SIDE_WITH;
 use conformance::cycles::refs::read_radiance;
 use conformance::manifest::Manifest;
 use conformance::mitsuba::compare::{radiance_test, Estimate, RadianceTest};
@@ -138,10 +140,18 @@ fn test05_mitsuba_and_cycles_references_agree_except_where_documented() {
     let mut names = Vec::new();
     for e in scenes("mitsuba", "").unwrap() {
         let o = check(&e, &m, 16, None).unwrap();
+        let metrics = o.metrics();
         let r = o
             .references
             .unwrap_or_else(|| panic!("{}: no Mitsuba or Cycles reference", e.name));
         if !r.passed() {
+            // The report says so, and which reference we side with.
+            assert!(
+                metrics.contains(SIDE_WITH),
+                "{}: the references disagree, but the report's line does not say which one we \
+side with: {metrics}",
+                e.name
+            );
             names.push(e.name.clone());
             disagree.push(format!(
                 "{} ({:.2} % pass, global z {:.1?})",

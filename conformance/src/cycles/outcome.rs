@@ -7,6 +7,14 @@ use crate::mitsuba::outcome::Outcome as Measured;
 use crate::verdict::Verdict;
 use renderer::render::Image;
 
+/// What the report says when Mitsuba's and Cycles' references disagree beyond their
+/// noise: which of them we side with, and why. The physical model follows Mitsuba's
+/// definitions (renderer/docs/physical.md), and ours must pass against Mitsuba for the
+/// gate to pass at all, so a disagreement between the references is read in Mitsuba's
+/// favour until the cause is found (conformance/docs/cycles.md, "The three-way verdict").
+pub const SIDE_WITH: &str = "INCONSISTENT: we side with Mitsuba, whose definitions the \
+physical model follows (conformance/docs/cycles.md)";
+
 /// One scene against Cycles: Mitsuba's measured outcome, reported as Cycles', and the two
 /// references against each other.
 pub struct Outcome {
@@ -44,11 +52,7 @@ impl Checked for Outcome {
             Some(r) => format!(
                 "{ours}; Mitsuba's reference against Cycles': {} ({:.3} % of pixel-channels \
 pass, global z {:.2} {:.2} {:.2})",
-                if r.passed() {
-                    "consistent"
-                } else {
-                    "INCONSISTENT"
-                },
+                if r.passed() { "consistent" } else { SIDE_WITH },
                 r.pass_fraction * 100.0,
                 r.global_z[0],
                 r.global_z[1],
