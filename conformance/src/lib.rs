@@ -13,6 +13,7 @@ pub mod images;
 pub mod manifest;
 pub mod mitsuba;
 pub mod oracle;
+pub mod placement;
 pub mod povray;
 pub mod reference;
 pub mod registry;

@@ -25,7 +25,7 @@
 //! normal.
 
 use glam::{DMat3, DVec3};
-use renderer::aggregate::{Aggregate, Instance, Shape};
+use renderer::aggregate::{Instance, Shape};
 use renderer::real::dvec3;
 use renderer::scene::{Color, Integrator, LightKind, MaterialModel, Scene};
 use renderer::transform::Affine64;
@@ -116,7 +116,12 @@ pub fn export(scene: &Scene) -> Result<Value, ExportError> {
         objects: Vec::new(),
     };
     let camera = e.camera()?;
-    e.aggregate(&scene.root, &Affine64::translate(scene.origin()), None)?;
+    crate::placement::each_leaf(
+        &scene.root,
+        &Affine64::translate(scene.origin()),
+        None,
+        &mut |inst, world, material| e.leaf(inst, *world, material),
+    )?;
     let lights = e.lights();
     let m = scene.camera.model;
     Ok(json!({
@@ -226,42 +231,9 @@ impl Exporter<'_> {
         Ok(self.materials.len() - 1)
     }
 
-    fn aggregate(
-        &mut self,
-        agg: &Aggregate,
-        outer: &Affine64,
-        inherited: Option<u32>,
-    ) -> Result<(), ExportError> {
-        for inst in agg.in_scene_order() {
-            self.instance(inst, outer, inherited)?;
-        }
-        Ok(())
-    }
-
-    fn instance(
-        &mut self,
-        inst: &Instance,
-        outer: &Affine64,
-        inherited: Option<u32>,
-    ) -> Result<(), ExportError> {
-        let inst = &*inst.unanchored();
-        // Inputs rounded to f32 first, so that both builds export the same text.
-        let local = match &inst.xf {
-            Some(x) => Affine64 {
-                m: DMat3::from_cols_array(&x.matrix().to_cols_array().map(|v| v as f32 as f64)),
-                d: dvec3(x.translation()).as_vec3().as_dvec3(),
-            },
-            None => Affine64::IDENTITY,
-        };
-        let world = outer.compose(&local);
-        let material = if inst.material == renderer::aggregate::INHERIT {
-            inherited.unwrap_or(0)
-        } else {
-            inst.material
-        };
-        if let Shape::Group(g) = &inst.shape {
-            return self.aggregate(g, &world, Some(material));
-        }
+    /// Writes one leaf shape of the scene, placed by `world`, of material `material`
+    /// ([`crate::placement::each_leaf`] walks the instances to it).
+    fn leaf(&mut self, inst: &Instance, world: Affine64, material: u32) -> Result<(), ExportError> {
         let mat = self.material(material)?;
         let placed = Affine64::linear(WORLD).compose(&world);
         match &inst.shape {
@@ -328,7 +300,7 @@ impl Exporter<'_> {
             }
             Shape::Cone { .. } => return Err(ExportError::Unsupported("the cone")),
             Shape::Plane => return Err(ExportError::Unsupported("the infinite plane")),
-            Shape::Group(_) => unreachable!("groups are flattened above"),
+            Shape::Group(_) => unreachable!("placement::each_leaf walks groups through"),
             Shape::Anchored(_) => unreachable!("written as the scene placed it (unanchored)"),
         }
         Ok(())

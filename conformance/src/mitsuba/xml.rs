@@ -23,8 +23,8 @@
 //! affine map.
 
 use glam::{DMat3, DMat4, DVec3};
+use renderer::aggregate::Instance;
 use renderer::aggregate::Shape;
-use renderer::aggregate::{Aggregate, Instance};
 use renderer::real::dvec3;
 use renderer::scene::Integrator;
 use renderer::scene::{Color, LightKind, Material, MaterialModel, Scene};
@@ -140,7 +140,12 @@ pub fn export(scene: &Scene, spp: u32, moment: bool) -> Result<Export, ExportErr
     }
     let root = &scene.root;
     // Top-level objects go from render space back to the scene's own coordinates.
-    e.aggregate(root, &Affine64::translate(scene.origin()), None)?;
+    crate::placement::each_leaf(
+        root,
+        &Affine64::translate(scene.origin()),
+        None,
+        &mut |inst, world, material| e.leaf(inst, *world, material),
+    )?;
     xml.push_str(&e.body);
     xml.push_str("</scene>\n");
     Ok(Export {
@@ -255,46 +260,9 @@ impl Exporter<'_> {
         })
     }
 
-    /// Flattens an aggregate (definitions included) into shapes. `inherited` is the
-    /// material of the enclosing instance.
-    fn aggregate(
-        &mut self,
-        agg: &Aggregate,
-        outer: &Affine64,
-        inherited: Option<u32>,
-    ) -> Result<(), ExportError> {
-        for inst in agg.in_scene_order() {
-            self.instance(inst, outer, inherited)?;
-        }
-        Ok(())
-    }
-
-    fn instance(
-        &mut self,
-        inst: &Instance,
-        outer: &Affine64,
-        inherited: Option<u32>,
-    ) -> Result<(), ExportError> {
-        // A shape in mixed precision is written as the scene placed it.
-        let inst = &*inst.unanchored();
-        // Inputs rounded to f32 first, so that the f32 and f64 builds compose them with the
-        // same f64 arithmetic and export the same text (and references stay shared).
-        let local = match &inst.xf {
-            Some(x) => Affine64 {
-                m: DMat3::from_cols_array(&x.matrix().to_cols_array().map(|v| v as f32 as f64)),
-                d: dvec3(x.translation()).as_vec3().as_dvec3(),
-            },
-            None => Affine64::IDENTITY,
-        };
-        let world = outer.compose(&local);
-        let material = if inst.material == renderer::aggregate::INHERIT {
-            inherited.unwrap_or(0)
-        } else {
-            inst.material
-        };
-        if let Shape::Group(g) = &inst.shape {
-            return self.aggregate(g, &world, Some(material));
-        }
+    /// Writes one leaf shape of the scene, placed by `world`, of material `material`
+    /// ([`crate::placement::each_leaf`] walks the instances to it).
+    fn leaf(&mut self, inst: &Instance, world: Affine64, material: u32) -> Result<(), ExportError> {
         let m = self.scene.material(material).clone();
         let bsdf = self.bsdf(&m)?;
         let emitter = if m.radiance != Color::ZERO {
@@ -385,7 +353,7 @@ impl Exporter<'_> {
             }
             Shape::Cone { .. } => return Err(ExportError::Unsupported("the cone")),
             Shape::Plane => return Err(ExportError::Unsupported("the infinite plane")),
-            Shape::Group(_) => unreachable!("groups are flattened above"),
+            Shape::Group(_) => unreachable!("placement::each_leaf walks groups through"),
             Shape::Anchored(_) => unreachable!("written as the scene placed it (unanchored)"),
         }
         Ok(())
