@@ -4,7 +4,7 @@
 //! cosine term, and the two references (Mitsuba's and Cycles') agree with each other where
 //! conformance/docs/cycles.md says they do.
 
-use conformance::catalog::{edited_copy, load, repo_root, scenes, Entry};
+use conformance::catalog::{edited_copy, find, load, repo_root, scenes, Entry};
 use conformance::checked::Checked;
 use conformance::cycles::harness::check;
 use conformance::cycles::outcome::SIDE_WITH;
@@ -17,15 +17,11 @@ use renderer::physical::Fault;
 use renderer::scene::Scene;
 
 fn manifest() -> Manifest {
-    Manifest::load(&repo_root().join("references/manifest.toml")).unwrap()
+    Manifest::committed().unwrap()
 }
 
 fn entry(name: &str) -> Entry {
-    scenes("mitsuba", name)
-        .unwrap()
-        .into_iter()
-        .find(|e| e.name == name)
-        .unwrap()
+    find("mitsuba", name).unwrap()
 }
 
 fn cycles_reference(name: &str) -> Estimate {

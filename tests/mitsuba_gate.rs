@@ -4,7 +4,7 @@
 //! and a half-pixel shift.
 
 use conformance::catalog::load;
-use conformance::catalog::{edited_copy, repo_root, scenes, Entry};
+use conformance::catalog::{edited_copy, find, repo_root, scenes, Entry};
 use conformance::manifest::Manifest;
 use conformance::mitsuba::compare::{radiance_test, Estimate, RadianceTest};
 use conformance::mitsuba::harness::{
@@ -15,15 +15,11 @@ use renderer::physical::Fault;
 use renderer::scene::Scene;
 
 fn manifest() -> Manifest {
-    Manifest::load(&repo_root().join("references/manifest.toml")).unwrap()
+    Manifest::committed().unwrap()
 }
 
 fn entry(name: &str) -> Entry {
-    scenes("mitsuba", name)
-        .unwrap()
-        .into_iter()
-        .find(|e| e.name == name)
-        .unwrap()
+    find("mitsuba", name).unwrap()
 }
 
 /// Renders a (modified) scene and runs the statistical test against the named reference.

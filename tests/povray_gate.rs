@@ -6,7 +6,7 @@
 //! `catalog.rs`.)
 
 use conformance::catalog::load;
-use conformance::catalog::{repo_root, scenes, Entry};
+use conformance::catalog::{find, repo_root, scenes, Entry};
 use conformance::manifest::Manifest;
 use conformance::povray::compare::Comparison;
 use conformance::povray::harness::{check, compare_render, read_reference, render_for_conformance};
@@ -18,15 +18,11 @@ use renderer::scene::Scene;
 use renderer::transform::{Affine64, Transform};
 
 fn manifest() -> Manifest {
-    Manifest::load(&repo_root().join("references/manifest.toml")).unwrap()
+    Manifest::committed().unwrap()
 }
 
 fn entry(name: &str) -> Entry {
-    scenes("povray", name)
-        .unwrap()
-        .into_iter()
-        .find(|e| e.name == name)
-        .unwrap()
+    find("povray", name).unwrap()
 }
 
 /// Renders a (modified) scene and compares it with the named scene's reference.

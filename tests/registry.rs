@@ -6,7 +6,7 @@
 //! gate, the report, the waivers or the command line.
 
 use anyhow::Result;
-use conformance::catalog::{repo_root, Entry};
+use conformance::catalog::Entry;
 use conformance::checked::{abs_difference, worst_pixels, Checked, Figure, Pixel};
 use conformance::gate::{by_scene, check_all, judge};
 use conformance::images::image_of;
@@ -145,7 +145,7 @@ fn registry() -> Registry {
 }
 
 fn manifest() -> Manifest {
-    Manifest::load(&repo_root().join("references/manifest.toml")).unwrap()
+    Manifest::committed().unwrap()
 }
 
 #[test]

@@ -30,6 +30,14 @@ pub struct Entry {
     pub path: PathBuf,
 }
 
+/// Scene `name` of `catalog`, exactly that name.
+pub fn find(catalog: &str, name: &str) -> Result<Entry> {
+    scenes(catalog, name)?
+        .into_iter()
+        .find(|e| e.name == name)
+        .with_context(|| format!("no scene {name} in conformance/scenes/{catalog}"))
+}
+
 /// The scenes of `catalog` (e.g. "povray") whose name contains `filter`, sorted by name.
 pub fn scenes(catalog: &str, filter: &str) -> std::io::Result<Vec<Entry>> {
     let dir = repo_root().join("conformance/scenes").join(catalog);

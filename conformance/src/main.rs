@@ -107,8 +107,7 @@ fn run() -> Result<ExitCode> {
     let registry = Registry::committed();
     match Cli::parse().cmd {
         Cmd::Run { filter } => {
-            let root = repo_root();
-            let manifest = Manifest::load(&root.join("references/manifest.toml"))?;
+            let manifest = Manifest::committed()?;
             let waivers = Waivers::committed()?;
             if let Err(e) = registry.select(&filter) {
                 eprintln!("error: {e:#}");

@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// One reference image.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -46,7 +46,17 @@ pub fn sha256(bytes: &[u8]) -> String {
     format!("sha256:{hex}")
 }
 
+/// The committed manifest's file: `references/manifest.toml` under the repository root.
+pub fn committed_path() -> PathBuf {
+    crate::catalog::repo_root().join("references/manifest.toml")
+}
+
 impl Manifest {
+    /// Reads the committed manifest ([`committed_path`]).
+    pub fn committed() -> anyhow::Result<Manifest> {
+        Manifest::load(&committed_path())
+    }
+
     /// Reads the manifest (empty when the file does not exist).
     pub fn load(path: &Path) -> anyhow::Result<Manifest> {
         if !path.exists() {

@@ -37,7 +37,7 @@ fn rmse(a: &[f32], b: &[f32]) -> f64 {
 
 fn main() -> Result<()> {
     let root = repo_root();
-    let manifest = Manifest::load(&root.join("references/manifest.toml"))?;
+    let manifest = Manifest::committed()?;
     let mut points = Vec::new();
     let work = std::env::temp_dir().join(format!("tradeoff-{}", std::process::id()));
     std::fs::create_dir_all(&work)?;

@@ -157,7 +157,7 @@ fn render_in(
 pub fn regenerate(entries: &[Entry]) -> Result<()> {
     let version = cycles_version()?;
     let root = repo_root();
-    let manifest_path = root.join("references/manifest.toml");
+    let manifest_path = crate::manifest::committed_path();
     let mut manifest = Manifest::load(&manifest_path)?;
     for e in entries {
         let t0 = std::time::Instant::now();
@@ -187,7 +187,7 @@ pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
 fn check_in(entries: &[Entry], tmp: &Path) -> Result<Vec<String>> {
     let version = cycles_version()?;
     let root = repo_root();
-    let manifest = Manifest::load(&root.join("references/manifest.toml"))?;
+    let manifest = Manifest::committed()?;
     let mut bad = Vec::new();
     for e in entries {
         let old = manifest

@@ -103,7 +103,7 @@ pub fn render_mitsuba(
 pub fn regenerate(entries: &[Entry], spp: u32) -> Result<()> {
     let version = mitsuba_version()?;
     let root = repo_root();
-    let manifest_path = root.join("references/manifest.toml");
+    let manifest_path = crate::manifest::committed_path();
     let mut manifest = Manifest::load(&manifest_path)?;
     for e in entries {
         let t0 = std::time::Instant::now();
@@ -133,7 +133,7 @@ pub fn regenerate(entries: &[Entry], spp: u32) -> Result<()> {
 pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
     let version = mitsuba_version()?;
     let root = repo_root();
-    let manifest = Manifest::load(&root.join("references/manifest.toml"))?;
+    let manifest = Manifest::committed()?;
     let tmp = scratch_dir("mi-check")?;
     let mut bad = Vec::new();
     for e in entries {

@@ -83,7 +83,7 @@ pub fn render_povray(entry: &Entry, out_dir: &Path, version: &str) -> Result<Rec
 pub fn regenerate(entries: &[Entry]) -> Result<()> {
     let version = povray_version()?;
     let root = repo_root();
-    let manifest_path = root.join("references/manifest.toml");
+    let manifest_path = crate::manifest::committed_path();
     let mut manifest = Manifest::load(&manifest_path)?;
     for e in entries {
         let rec = render_povray(e, &root.join("references/povray"), &version)?;
@@ -99,7 +99,7 @@ pub fn regenerate(entries: &[Entry]) -> Result<()> {
 pub fn check(entries: &[Entry]) -> Result<Vec<String>> {
     let version = povray_version()?;
     let root = repo_root();
-    let manifest = Manifest::load(&root.join("references/manifest.toml"))?;
+    let manifest = Manifest::committed()?;
     let tmp = scratch_dir("check")?;
     let mut bad = Vec::new();
     for e in entries {
