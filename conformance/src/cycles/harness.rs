@@ -6,10 +6,10 @@
 use super::outcome::Outcome;
 use super::refgen::export_text;
 use super::refs::read_radiance;
-use crate::catalog::{load, repo_root, Entry};
+use crate::catalog::{repo_root, Entry};
 use crate::manifest::{freshness, Manifest};
 use crate::mitsuba::compare::{radiance_test, Estimate, RadianceTest};
-use crate::mitsuba::harness::{compared, read_geometry, render_estimate, Render};
+use crate::mitsuba::harness::{compared, read_geometry, rendered, Render};
 use crate::mitsuba::outcome::Outcome as Measured;
 use anyhow::{Context, Result};
 use renderer::physical::Fault;
@@ -21,16 +21,7 @@ pub fn check(
     spp: u32,
     fault: Option<Fault>,
 ) -> Result<Outcome> {
-    let (scene, text) = load(entry)?;
-    anyhow::ensure!(
-        !scene.settings.adaptive,
-        "{}: render.adaptive is set, but the radiance test takes every pixel's mean to be of \
-`spp` samples; render the catalog scene without it",
-        entry.name
-    );
-    let t0 = std::time::Instant::now();
-    let ours = render_estimate(&scene, spp, fault);
-    let seconds = t0.elapsed().as_secs_f64();
+    let (scene, text, Render { ours, spp, seconds }) = rendered(entry, spp, fault)?;
     let rad = manifest.reference.get(&format!("cycles/{}", entry.name));
     let geo = manifest
         .reference

@@ -138,16 +138,7 @@ pub fn check(
     spp: u32,
     fault: Option<Fault>,
 ) -> Result<Outcome> {
-    let (scene, text) = load(entry)?;
-    anyhow::ensure!(
-        !scene.settings.adaptive,
-        "{}: render.adaptive is set, but the radiance test takes every pixel's mean to be of \
-`spp` samples (its standard errors); render the catalog scene without it",
-        entry.name
-    );
-    let t0 = std::time::Instant::now();
-    let ours = render_estimate(&scene, spp, fault);
-    let seconds = t0.elapsed().as_secs_f64();
+    let (scene, text, Render { ours, spp, seconds }) = rendered(entry, spp, fault)?;
     let rad = manifest.reference.get(&format!("mitsuba/{}", entry.name));
     let geo = manifest
         .reference
@@ -170,6 +161,23 @@ pub fn check(
         &fresh,
         (ref_rgb, ref_est, ref_geo),
     )
+}
+
+/// Loads a catalog scene and renders it as the statistical comparison needs (every pixel
+/// at `spp`, with moments and AOVs, timed): the scene, its text, and the render. What
+/// Mitsuba's `check` and Cycles' share.
+pub fn rendered(entry: &Entry, spp: u32, fault: Option<Fault>) -> Result<(Scene, String, Render)> {
+    let (scene, text) = load(entry)?;
+    anyhow::ensure!(
+        !scene.settings.adaptive,
+        "{}: render.adaptive is set, but the radiance test takes every pixel's mean to be of \
+`spp` samples (its standard errors); render the catalog scene without it",
+        entry.name
+    );
+    let t0 = std::time::Instant::now();
+    let ours = render_estimate(&scene, spp, fault);
+    let seconds = t0.elapsed().as_secs_f64();
+    Ok((scene, text, Render { ours, spp, seconds }))
 }
 
 /// Our render for a comparison: the image, its samples per pixel, and the seconds it took.
