@@ -374,8 +374,21 @@ impl PixelSampler {
         self.dim
     }
 
-    /// The next number in [0, 1).
+    /// The next number in [0, 1). The independent sampler's one mix is inlined at every
+    /// call; the other kinds' arithmetic stays out of line.
+    #[inline(always)]
     pub fn next_1d(&mut self) -> f64 {
+        if self.kind == SamplerKind::Independent {
+            let d = self.dim;
+            self.dim += 1;
+            return to_unit(mix64(self.sample_mix.wrapping_add(d as u64)));
+        }
+        self.next_1d_scrambled()
+    }
+
+    /// [`PixelSampler::next_1d`] for the stratified and sobol samplers.
+    #[inline(never)]
+    fn next_1d_scrambled(&mut self) -> f64 {
         let d = self.dim;
         self.dim += 1;
         match self.kind {
@@ -396,8 +409,19 @@ impl PixelSampler {
         }
     }
 
-    /// The next point in [0, 1)².
+    /// The next point in [0, 1)²: inlined for the independent sampler, as
+    /// [`PixelSampler::next_1d`].
+    #[inline(always)]
     pub fn next_2d(&mut self) -> (f64, f64) {
+        if self.kind == SamplerKind::Independent {
+            return (self.next_1d(), self.next_1d());
+        }
+        self.next_2d_scrambled()
+    }
+
+    /// [`PixelSampler::next_2d`] for the stratified and sobol samplers.
+    #[inline(never)]
+    fn next_2d_scrambled(&mut self) -> (f64, f64) {
         match self.kind {
             SamplerKind::Independent => (self.next_1d(), self.next_1d()),
             SamplerKind::Stratified if self.square > 0 => {
