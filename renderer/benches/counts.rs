@@ -6,7 +6,7 @@
 //! `scripts/bench-counts.sh` compares them with `renderer/benches/baseline.json` and fails
 //! on growth beyond the stated limit. Setup (scene construction for the trace benchmarks)
 //! is not counted, and neither is freeing what a benchmark built or was given: each
-//! returns it to a `teardown` that drops it outside the count (a million-instance
+//! returns it to `drop` as its `teardown`, outside the count (a million-instance
 //! aggregate's drop had been a fifth of `primary_spheres.spheres_1e6`'s count, and
 //! moved it by +23 % when the drop glue of `Shape` stopped being inlined: see
 //! renderer/docs/performance.md). Everything runs on one thread, so the counts are
@@ -41,24 +41,19 @@ fn one_thread(samples: Option<u32>) -> Options {
     }
 }
 
-/// A benchmark's teardown: drops what it returns, outside the count.
-fn free<T>(what: T) {
-    drop(what)
-}
-
-#[library_benchmark(teardown = free)]
+#[library_benchmark(teardown = drop)]
 #[bench::spheres_100(100)]
 #[bench::spheres_1e5(100_000)]
 fn build_spheres(n: usize) -> Aggregate {
     black_box(common::cloud(black_box(n)))
 }
 
-#[library_benchmark(teardown = free)]
+#[library_benchmark(teardown = drop)]
 fn build_mesh() -> Aggregate {
     black_box(mesh_scene())
 }
 
-#[library_benchmark(teardown = free)]
+#[library_benchmark(teardown = drop)]
 #[bench::spheres_100(args = (100,), setup = common::cloud)]
 #[bench::spheres_1e6(args = (1_000_000,), setup = common::cloud)]
 fn primary_spheres(agg: Aggregate) -> (u32, Aggregate) {
@@ -66,14 +61,14 @@ fn primary_spheres(agg: Aggregate) -> (u32, Aggregate) {
     (hits, agg)
 }
 
-#[library_benchmark(teardown = free)]
+#[library_benchmark(teardown = drop)]
 #[bench::mesh_1e5(setup = mesh_scene)]
 fn primary_mesh(agg: Aggregate) -> (u32, Aggregate) {
     let hits = black_box(common::trace_all(&common::camera(), black_box(&agg)));
     (hits, agg)
 }
 
-#[library_benchmark(teardown = free)]
+#[library_benchmark(teardown = drop)]
 #[bench::whitted(args = ("povray/shade_refract_sphere.toml", None), setup = frame_setup)]
 #[bench::direct(args = ("mitsuba/mi_area_soft_shadow.toml", Some(4)), setup = frame_setup)]
 #[bench::path_cornell(args = ("mitsuba/mi_cornell.toml", Some(4)), setup = frame_setup)]
@@ -92,7 +87,7 @@ fn frame_setup(rel: &str, samples: Option<u32>) -> (Scene, Options) {
     (catalog_scene(rel), one_thread(samples))
 }
 
-#[library_benchmark(teardown = free)]
+#[library_benchmark(teardown = drop)]
 #[bench::hier_three_levels("povray/hier_three_levels.toml")]
 #[bench::cornell("mitsuba/mi_cornell.toml")]
 fn parse(rel: &str) -> Scene {
