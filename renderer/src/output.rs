@@ -292,7 +292,7 @@ fn encode_png(img: &Image, w: &mut impl std::io::Write, map: ToneMap) -> Result<
 
 /// Encodes 8-bit RGB pixels (`width · height · 3` bytes, rows top to bottom) as a PNG, with
 /// the `png` crate's fast compression (fdeflate) and adaptive filtering. Its balanced
-/// compression (zlib level 6, as libpng and POV-Ray write) made files 20-40 % smaller
+/// compression (zlib level 6, as libpng and POV-Ray write) made files 20-42 % smaller
 /// but took 7-15 times as long: 0.11-0.24 s of one core for a 1920 x 1440 image, 10-15 %
 /// of a Whitted render's whole CPU time (renderer/docs/performance.md, "PNG output").
 pub fn encode_png_rgb8(
