@@ -48,6 +48,23 @@ pub(super) struct BsdfSample {
     pub(super) reflected: bool,
 }
 
+impl BsdfSample {
+    /// A diffuse continuation in `dir`, whose lobe gives `f` (the BSDF times the cosine)
+    /// and which was drawn with solid-angle density `pdf` (> 0): the cosine lobe's own
+    /// ([`Surface::sample`]) or the specular guides' mixture
+    /// (`PhysicalIntegrator::sample_guided`).
+    #[inline(always)]
+    pub(super) fn diffuse(dir: glam::DVec3, f: glam::DVec3, pdf: f64) -> BsdfSample {
+        BsdfSample {
+            dir,
+            weight: f / pdf,
+            pdf,
+            eta: 1.0,
+            reflected: false,
+        }
+    }
+}
+
 /// The mirror direction of `wo` about unit `n`, given `cos_i = n·wo`: the sampled
 /// reflection of the conductor and the dielectric, and the ray `reflected_emission`
 /// traces (the same bits, so it meets what the sampled reflection meets).
@@ -128,13 +145,7 @@ impl Surface<'_> {
                 if pdf <= 0.0 {
                     return None;
                 }
-                Some(BsdfSample {
-                    dir,
-                    weight: f / pdf,
-                    pdf,
-                    eta: 1.0,
-                    reflected: false,
-                })
+                Some(BsdfSample::diffuse(dir, f, pdf))
             }
             MaterialModel::Conductor => {
                 s.next_1d();

@@ -137,14 +137,7 @@ impl<'a> PhysicalIntegrator<'a> {
         if cos_pdf <= 0.0 {
             return None;
         }
-        let pdf = g.pdf(cos_pdf, dir, own);
-        Some(BsdfSample {
-            dir,
-            weight: f / pdf,
-            pdf,
-            eta: 1.0,
-            reflected: false,
-        })
+        Some(BsdfSample::diffuse(dir, f, g.pdf(cos_pdf, dir, own)))
     }
 
     /// What both path directions ask of the scene at a vertex (vertex.rs).
