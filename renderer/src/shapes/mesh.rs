@@ -19,16 +19,19 @@ pub struct Mesh {
     pub uvs: Option<Vec<Vec2>>,
     /// Triangles as vertex indices, in BVH leaf order (not file order).
     pub triangles: Vec<[u32; 3]>,
-    /// For each triangle of `triangles`, its index in the order it was given (the file's):
-    /// what [`Mesh::triangles_as_given`] undoes.
-    given: Vec<u32>,
     bvh: Bvh<8>,
     /// The triangles' vertices, four per pack, in the BVH's slot order: every leaf starts
     /// a pack, so a leaf is tested a pack (four triangles) at a time with no index array
     /// in between. (36 bytes per triangle, plus the padding of partly filled packs.)
     packs: Vec<TriPack>,
-    /// For each pack lane, its triangle's index in `triangles` (`u32::MAX` for padding).
+    /// For each pack lane, its triangle's index in `triangles` (`u32::MAX` for padding):
+    /// read for the winner's normals and uvs only.
     pack_tris: Vec<[u32; 4]>,
+    /// For each pack lane, its triangle's number in the order it was given (the file's;
+    /// `u32::MAX` for padding): the hit's `prim`, read once a search, straight from the
+    /// winner's pack and lane (through `pack_tris` it was two dependent reads at
+    /// scattered addresses), and what [`Mesh::triangles_as_given`] undoes.
+    pack_given: Vec<[u32; 4]>,
 }
 
 /// The closest hit so far in a mesh search: the triangle (its pack and lane), `t` and the
@@ -105,23 +108,24 @@ impl Mesh {
         let numbered: Vec<(u32, [u32; 3])> = (0..).zip(triangles).collect();
         let (bvh, slots) = Bvh::<8>::build_aligned::<_, 4>(numbered, &boxes, 1.0);
         let mut triangles = Vec::with_capacity(boxes.len());
-        let mut given = Vec::with_capacity(boxes.len());
         let mut packs = crate::pages::huge_with_capacity(slots.len() / 4);
         let advised = packs.as_ptr();
         let mut pack_tris = Vec::with_capacity(slots.len() / 4);
+        let mut pack_given = Vec::with_capacity(slots.len() / 4);
         for chunk in slots.chunks(4) {
             let mut verts = Vec::with_capacity(4);
-            let mut ids = [u32::MAX; 4];
+            let (mut ids, mut numbers) = ([u32::MAX; 4], [u32::MAX; 4]);
             for (lane, t) in chunk.iter().enumerate() {
                 if let Some((g, t)) = t {
                     ids[lane] = triangles.len() as u32;
+                    numbers[lane] = *g;
                     verts.push(t.map(|k| positions[k as usize]));
                     triangles.push(*t);
-                    given.push(*g);
                 }
             }
             packs.push(TriPack::new(&verts));
             pack_tris.push(ids);
+            pack_given.push(numbers);
         }
         debug_assert_eq!(
             packs.as_ptr(),
@@ -133,10 +137,10 @@ impl Mesh {
             normals,
             uvs,
             triangles,
-            given,
             bvh,
             packs,
             pack_tris,
+            pack_given,
         })
     }
 
@@ -204,8 +208,10 @@ impl Mesh {
     /// does not change with the tree.
     pub fn triangles_as_given(&self) -> Vec<[u32; 3]> {
         let mut out = vec![[0; 3]; self.triangles.len()];
-        for (t, &g) in self.triangles.iter().zip(&self.given) {
-            out[g as usize] = *t;
+        for (ids, numbers) in self.pack_tris.iter().zip(&self.pack_given) {
+            for (&i, &g) in ids.iter().zip(numbers).filter(|(&i, _)| i != u32::MAX) {
+                out[g as usize] = self.triangles[i as usize];
+            }
         }
         out
     }
@@ -341,8 +347,9 @@ impl Mesh {
     fn finish(&self, c: Candidate) -> Hit {
         let (t, b) = (c.t, c.b);
         let [p0, p1, p2] = self.packs[c.pack as usize].triangle(c.lane as usize);
-        let index = self.pack_tris[c.pack as usize][c.lane as usize] as usize;
-        let tri = (self.normals.is_some() || self.uvs.is_some()).then(|| self.triangles[index]);
+        let (pack, lane) = (c.pack as usize, c.lane as usize);
+        let tri = (self.normals.is_some() || self.uvs.is_some())
+            .then(|| self.triangles[self.pack_tris[pack][lane] as usize]);
         let n = self.normals.as_deref().zip(tri).map(|(v, t)| pick3(v, t));
         let uv = self.uvs.as_deref().zip(tri).map(|(v, t)| pick3(v, t));
         let mut hit = surface(
@@ -353,7 +360,7 @@ impl Mesh {
             n.as_ref(),
             uv.as_ref(),
         );
-        hit.prim = self.given[index];
+        hit.prim = self.pack_given[pack][lane];
         hit
     }
 
