@@ -346,8 +346,8 @@ impl Mesh {
     #[inline]
     fn finish(&self, c: Candidate) -> Hit {
         let (t, b) = (c.t, c.b);
-        let [p0, p1, p2] = self.packs[c.pack as usize].triangle(c.lane as usize);
         let (pack, lane) = (c.pack as usize, c.lane as usize);
+        let [p0, p1, p2] = self.packs[pack].triangle(lane);
         let tri = (self.normals.is_some() || self.uvs.is_some())
             .then(|| self.triangles[self.pack_tris[pack][lane] as usize]);
         let n = self.normals.as_deref().zip(tri).map(|(v, t)| pick3(v, t));
