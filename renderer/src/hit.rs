@@ -75,13 +75,12 @@ impl Hit {
 
     /// Fills in the material and object id still unassigned, from an enclosing instance.
     #[inline]
-    pub(crate) fn inherit(mut self, material: u32, object_id: u32) -> Hit {
+    pub(crate) fn inherit(&mut self, material: u32, object_id: u32) {
         if self.material == INHERIT {
             self.material = material;
         }
         if self.object_id == 0 {
             self.object_id = object_id;
         }
-        self
     }
 }
