@@ -14,7 +14,7 @@
 
 use crate::aabb::Aabb;
 use crate::bvh::{Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
-pub use crate::hit::{Hit, INHERIT};
+pub use crate::hit::{Hit, RayHit, INHERIT};
 use crate::ray::Ray;
 use crate::real::{Mat3, Real, Vec3};
 use crate::shapes::anchored::{self, Anchored};
@@ -111,6 +111,17 @@ impl Shape {
             Shape::Sphere => shapes::sphere::intersect_bare(ray, t_min, t_max),
             Shape::Anchored(a) => a.intersect_bare(ray, t_min, t_max),
             _ => self.intersect(ray, t_min, t_max),
+        }
+    }
+
+    /// [`Shape::candidate`] for [`Aggregate::nearest`]: meshes and definitions search
+    /// without building a record; every other shape's candidate is its record already.
+    #[inline(always)]
+    fn nearest(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<RayHit> {
+        match self {
+            Shape::Mesh(m) => m.nearest(ray, t_min, t_max),
+            Shape::Group(g) => g.nearest(ray, t_min, t_max),
+            _ => self.candidate(ray, t_min, t_max).map(|h| RayHit::of(&h)),
         }
     }
 
@@ -251,6 +262,15 @@ impl Instance {
         }
     }
 
+    /// [`Instance::local_hit`] for [`Aggregate::nearest`].
+    #[inline]
+    fn nearest_local(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<RayHit> {
+        match &self.xf {
+            Some(x) => self.shape.nearest(&x.inv_ray(ray), t_min, t_max),
+            None => self.shape.nearest(ray, t_min, t_max),
+        }
+    }
+
     /// [`Instance::local_hit`] for up to [`BATCH`] rays, each with its own `t_max`: the
     /// shape walks them together where it has a tree of its own.
     fn local_hit_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real], out: &mut [Option<Hit>]) {
@@ -277,6 +297,14 @@ impl Instance {
             h.map_normals(|n| x.normal(n));
         }
         h.inherit(self.material, self.object_id);
+    }
+
+    /// [`Instance::finish`] for a [`RayHit`]: its normal mapped as the record's.
+    #[inline]
+    fn finish_nearest(&self, h: &mut RayHit) {
+        if let Some(x) = &self.xf {
+            h.n_geo = x.normal(h.n_geo);
+        }
     }
 
     /// Whether anything is hit.
@@ -363,6 +391,12 @@ impl Lead {
         (h.p, h.err) = map_point_with_error(&m, self.c, h.p, h.err);
         h.map_normals(|n| map_normal(&inv, n));
         h.inherit(self.material, self.object_id);
+    }
+
+    /// [`Lead::finish`] for a [`RayHit`]: its normal mapped as the record's.
+    #[inline]
+    fn finish_nearest(&self, h: &mut RayHit) {
+        h.n_geo = map_normal(&Mat3::from_diagonal(Vec3::splat(self.s)), h.n_geo);
     }
 }
 
@@ -682,6 +716,54 @@ impl Aggregate {
             _ => self.instances[k].finish::<UV>(h),
         }
         h.surface = h.surface.wrapping_add(self.surface_offset(k));
+    }
+
+    /// The closest hit with `t_min < t < t_max` as Embree's `rtcIntersect1` reports one
+    /// ([`RayHit`]: distance, geometric normal, barycentrics, surface and primitive), for a
+    /// caller that needs no shading record: the search of [`Aggregate::intersect`], whose
+    /// meshes build no record for their winner, and each field the bits of the same field
+    /// of `intersect`'s record (tests/bvh.rs checks it). What the peers benchmark times
+    /// against Embree (renderer/docs/performance.md).
+    pub fn nearest(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<RayHit> {
+        let mut best: Option<(usize, RayHit)> = None;
+        let mut t_max = t_max;
+        for (k, inst) in self.unbounded().iter().enumerate() {
+            if let Some(h) = inst.nearest_local(ray, t_min, t_max) {
+                t_max = h.t;
+                best = Some((self.bounded() + k, h));
+            }
+        }
+        let local = |k: usize, t_max: Real| {
+            let lead = &self.leads[k];
+            if lead.s != 0.0 {
+                shapes::sphere::intersect_bare(&lead.object_ray(ray), t_min, t_max)
+                    .map(|h| RayHit::of(&h))
+            } else {
+                self.instances[k].nearest_local(ray, t_min, t_max)
+            }
+        };
+        if self.bounded() == 1 {
+            // One bounded instance (a scene of one mesh): asked directly, without the
+            // tree's walk, as `occluded` does.
+            if let Some(h) = local(0, t_max) {
+                best = Some((0, h));
+            }
+        } else {
+            self.bvh.traverse(ray, t_min, t_max, false, |k, tmax| match local(k as usize, tmax) {
+                Some(h) => {
+                    best = Some((k as usize, h));
+                    Visit::Hit(h.t)
+                }
+                None => Visit::Miss,
+            });
+        }
+        let (k, mut h) = best?;
+        match self.leads.get(k) {
+            Some(lead) if lead.s != 0.0 => lead.finish_nearest(&mut h),
+            _ => self.instances[k].finish_nearest(&mut h),
+        }
+        h.surface = h.surface.wrapping_add(self.surface_offset(k));
+        Some(h)
     }
 
     /// Whether anything is hit with `t_min < t < t_max`.

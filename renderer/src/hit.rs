@@ -38,6 +38,42 @@ pub struct Hit {
     pub prim: u32,
 }
 
+/// What a search for the closest hit reports when its caller needs no shading record
+/// ([`Aggregate::nearest`](crate::aggregate::Aggregate::nearest)): the fields of Embree's
+/// `RTCHit` (distance, geometric normal, barycentric coordinates, which surface and
+/// which primitive), without the point and its error bound, the shading normal, the uv
+/// or the material, which a mesh's record builds from the winning triangle. Each field has
+/// the bits of the same field of the full record ([`Hit`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayHit {
+    /// Ray parameter.
+    pub t: Real,
+    /// Outward geometric normal (not normalized), in the space of whoever returned it.
+    pub n_geo: Vec3,
+    /// A mesh triangle's barycentric coordinates at the hit, `(b₁, b₂)` (Embree's `u`,
+    /// `v`; the full record's `uv` when the mesh has no uvs of its own); `(0, 0)` for
+    /// every other shape.
+    pub b: Vec2,
+    /// Which surface of the scene was hit ([`Hit::surface`]).
+    pub surface: u64,
+    /// Which primitive of its shape was hit ([`Hit::prim`]).
+    pub prim: u32,
+}
+
+impl RayHit {
+    /// The fields of a full record, for a shape whose search builds one anyway.
+    #[inline]
+    pub fn of(h: &Hit) -> RayHit {
+        RayHit {
+            t: h.t,
+            n_geo: h.n_geo,
+            b: Vec2::ZERO,
+            surface: h.surface,
+            prim: h.prim,
+        }
+    }
+}
+
 impl Hit {
     /// A bare hit: material and object id unassigned.
     #[inline]

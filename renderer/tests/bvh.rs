@@ -587,6 +587,87 @@ fn hit_bits(h: &Option<Hit>) -> Option<HitBits> {
     })
 }
 
+/// `Aggregate::nearest` (the record Embree reports: what the peers benchmark times) makes
+/// `intersect`'s search: its distance, geometric normal, surface and primitive are the
+/// bits of `intersect`'s record, and it finds nothing exactly when `intersect` does, on
+/// random scenes (meshes, definitions, planes, general and uniformly scaled instances,
+/// placed or not) and on one placed mesh, where its barycentrics are the record's uv (the
+/// mesh has none of its own).
+#[test]
+fn nearest_reports_the_records_fields() {
+    let mut rng = SplitMix(4242);
+    let mesh = Arc::new(bumpy_sphere(30, 40, 9));
+    let mut scenes: Vec<(Aggregate, f64, &str)> = Vec::new();
+    for (n, with_plane) in [(1, false), (3, true), (100, true), (2000, false), (2000, true)] {
+        let (agg, extent) = random_scene(&mut rng, n, with_plane);
+        scenes.push((agg, extent, "random"));
+    }
+    let spheres: Vec<Instance> = (0..300)
+        .map(|i| Instance {
+            shape: Shape::Sphere,
+            xf: Some(
+                Transform::new(&Affine64 {
+                    m: DMat3::from_diagonal(DVec3::splat(rng.range(0.2, 1.0))),
+                    d: rng.vec(-10.0, 10.0),
+                })
+                .unwrap(),
+            ),
+            material: 0,
+            object_id: i + 1,
+        })
+        .collect();
+    scenes.push((Aggregate::new(spheres), 10.0, "uniformly scaled spheres"));
+    let placed = Instance {
+        shape: Shape::Mesh(mesh.clone()),
+        xf: Some(Transform::new(&random_affine(&mut rng, 1.0, 2.0)).unwrap()),
+        material: 0,
+        object_id: 1,
+    };
+    scenes.push((Aggregate::new(vec![placed]), 3.0, "one placed mesh"));
+    for (scene, (agg, extent, what)) in scenes.iter().enumerate() {
+        let (mut hits, mut prims) = (0, std::collections::HashSet::new());
+        for i in 0..3000 {
+            let (r, t_min, t_max) = random_ray(&mut rng, agg, *extent);
+            let full = agg.intersect(&r, t_min, t_max);
+            let lean = agg.nearest(&r, t_min, t_max);
+            let at = format!("scene {scene} ({what}), ray {i}: {r:?} [{t_min}, {t_max}]");
+            let (Some(full), Some(lean)) = (full, lean) else {
+                assert_eq!(
+                    full.is_some(),
+                    lean.is_some(),
+                    "{at}: Aggregate::nearest and intersect disagree on whether anything is hit"
+                );
+                continue;
+            };
+            let bits = |v: Vec3| v.to_array().map(Real::to_bits);
+            assert_eq!(
+                (lean.t.to_bits(), bits(lean.n_geo), lean.surface, lean.prim),
+                (full.t.to_bits(), bits(full.n_geo), full.surface, full.prim),
+                "{at}: Aggregate::nearest's (t, n_geo, surface, prim) differ from intersect's \
+                 record (its search, or the normal's mapping in finish_nearest)"
+            );
+            if *what == "one placed mesh" {
+                assert_eq!(
+                    lean.b.to_array().map(Real::to_bits),
+                    full.uv.to_array().map(Real::to_bits),
+                    "{at}: Mesh::nearest's barycentrics differ from the record's uv"
+                );
+            }
+            hits += 1;
+            prims.insert((lean.surface, lean.prim));
+        }
+        assert!(hits > 300, "scene {scene} ({what}): only {hits} of 3000 rays hit");
+        // Many surfaces and primitives, so that the numbering is compared too (a scene of
+        // one primitive has one).
+        let want = agg.instances.len().min(20);
+        assert!(
+            prims.len() >= want,
+            "scene {scene} ({what}): only {} (surface, primitive) pairs hit",
+            prims.len()
+        );
+    }
+}
+
 /// Camera rays go through `intersect_many`, which walks rays of a large tree interleaved.
 /// Each must get exactly the hit `intersect` gives it alone: same bits in every field,
 /// on a tree large enough to interleave (mixed shapes, a plane, nested groups) and on a

@@ -4,7 +4,7 @@
 use super::triangle::{surface, TriPack, WoopRay};
 use crate::aabb::Aabb;
 use crate::bvh::{Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
-use crate::hit::Hit;
+use crate::hit::{Hit, RayHit};
 use crate::ray::Ray;
 use crate::real::{Real, Vec2, Vec3};
 
@@ -43,6 +43,13 @@ struct Candidate {
     lane: u8,
     t: Real,
     b: [Real; 3],
+}
+
+/// A triangle's geometric normal, `(p₁ − p₀) × (p₂ − p₀)` (not normalized): the hit
+/// record's and the [`RayHit`]'s.
+#[inline(always)]
+fn geometric_normal([p0, p1, p2]: &[Vec3; 3]) -> Vec3 {
+    (*p1 - *p0).cross(*p2 - *p0)
 }
 
 /// The values of a per-vertex array at a triangle's three vertices.
@@ -230,6 +237,28 @@ impl Mesh {
     /// Closest hit. The search keeps only the closest `t` and its triangle; the hit
     /// record (point, normals, uv) is built once, for the winner.
     pub fn intersect(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+        self.search(ray, t_min, t_max).map(|c| self.finish(c))
+    }
+
+    /// The closest hit as a [`RayHit`]: the search of [`Mesh::intersect`], and of its
+    /// winner only the geometric normal, the barycentrics and the number, which the record
+    /// computes the same way (the point, its error bound and the shading normal are left
+    /// out).
+    pub fn nearest(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<RayHit> {
+        let c = self.search(ray, t_min, t_max)?;
+        let (pack, lane) = (c.pack as usize, c.lane as usize);
+        Some(RayHit {
+            t: c.t,
+            n_geo: geometric_normal(&self.packs[pack].triangle(lane)),
+            b: Vec2::new(c.b[1], c.b[2]),
+            surface: 0,
+            prim: self.pack_given[pack][lane],
+        })
+    }
+
+    /// The search for the closest hit: the winning triangle, its `t` and barycentrics.
+    #[inline(always)]
+    fn search(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Candidate> {
         let wr = WoopRay::new(ray);
         let mut best: Option<Candidate> = None;
         self.bvh.traverse_leaves_prefetching(
@@ -240,7 +269,7 @@ impl Mesh {
             |first, count, tmax| self.visit_leaf(&wr, first, count, t_min, tmax, &mut best),
             |first| self.leaf_at(first),
         );
-        best.map(|c| self.finish(c))
+        best
     }
 
     /// [`Mesh::intersect`] for up to [`BATCH`] rays, each with its own `t_max`. When the
@@ -352,14 +381,8 @@ impl Mesh {
             .then(|| self.triangles[self.pack_tris[pack][lane] as usize]);
         let n = self.normals.as_deref().zip(tri).map(|(v, t)| pick3(v, t));
         let uv = self.uvs.as_deref().zip(tri).map(|(v, t)| pick3(v, t));
-        let mut hit = surface(
-            t,
-            b,
-            [p0, p1, p2],
-            (p1 - p0).cross(p2 - p0),
-            n.as_ref(),
-            uv.as_ref(),
-        );
+        let n_geo = geometric_normal(&[p0, p1, p2]);
+        let mut hit = surface(t, b, [p0, p1, p2], n_geo, n.as_ref(), uv.as_ref());
         hit.prim = self.pack_given[pack][lane];
         hit
     }
