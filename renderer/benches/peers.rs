@@ -355,7 +355,7 @@ fn profile(set: &str, passes: usize) {
     let sets = ray_sets(&agg, 640, 480);
     let Some(s) = sets.iter().find(|s| s.name == name) else {
         eprintln!(
-            "no ray set {name} (coherent, shuffled, occlusion, bounce; each also as NAME-any)"
+            "no ray set {name} (coherent, shuffled, occlusion, bounce; each also as NAME-any or NAME-nearest)"
         );
         std::process::exit(2);
     };
