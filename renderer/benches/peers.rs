@@ -211,7 +211,26 @@ fn write_u32(path: &Path, data: impl Iterator<Item = u32>) {
 /// closest hit the distance and the primitive (`f32::INFINITY` and `u32::MAX` on a miss),
 /// for any hit whether there is one. Every ray's result is written to memory, so no part
 /// of a search can be optimised away, on our side or on Embree's.
-type Store<'a> = dyn Fn(&Ray, Real, &mut (f32, u32)) + Sync + 'a;
+type Store<'a> = dyn Fn(&[(Ray, Real)], &mut [(f32, u32)]) + Sync + 'a;
+
+/// A [`Store`] that takes the rays one at a time.
+fn each_ray(
+    f: impl Fn(&Ray, Real, &mut (f32, u32)) + Sync,
+) -> impl Fn(&[(Ray, Real)], &mut [(f32, u32)]) + Sync {
+    move |rays, out| {
+        for ((r, t), o) in rays.iter().zip(out) {
+            f(r, *t, o);
+        }
+    }
+}
+
+/// The rays of a chunk and their common `t_max`, for the calls that take many rays at
+/// once (every ray set has one `t_max` for all its rays).
+fn as_stream(rays: &[(Ray, Real)]) -> (Vec<Ray>, Real) {
+    let t = rays[0].1;
+    assert!(rays.iter().all(|r| r.1 == t), "one t_max for the chunk");
+    (rays.iter().map(|r| r.0).collect(), t)
+}
 
 /// Rays per second (millions) of `f` over `rays` on `threads` threads, repeated for at
 /// least `secs` seconds, each ray's result stored in `out`; returns (Mrays/s, the number
@@ -232,11 +251,7 @@ fn time_rays(
         let mut run = || {
             rays.par_chunks(4096)
                 .zip(out.par_chunks_mut(4096))
-                .for_each(|(c, o)| {
-                    for ((r, t), o) in c.iter().zip(o) {
-                        f(r, *t, o);
-                    }
-                })
+                .for_each(|(c, o)| f(c, o))
         };
         run();
         let t0 = Instant::now();
@@ -281,20 +296,44 @@ fn mesh(dir: &Path, quick: bool) {
         // through `black_box`, so none of it is left uncomputed), and with our full
         // shading record (`Aggregate::intersect`: also the point and its error bound, the
         // shading normal, the uv and the material), which the renderer's integrators use.
-        let closest = |r: &Ray, t: Real, o: &mut (f32, u32)| {
+        // Also, as streams: our calls that take many rays at once and walk them 16 at a
+        // time interleaved (`Aggregate::intersect_many`, what the renderer's camera rays
+        // use, with the full record; `Aggregate::occluded_many`), against the same
+        // single-ray Embree figures (Embree 4 has no stream call; its packets are not in
+        // embreex).
+        let closest = each_ray(|r: &Ray, t: Real, o: &mut (f32, u32)| {
             *o = match std::hint::black_box(agg.nearest(r, 0.0, t)) {
                 Some(h) => (h.t as f32, h.prim),
                 None => (f32::INFINITY, u32::MAX),
             }
-        };
-        let record = |r: &Ray, t: Real, o: &mut (f32, u32)| {
+        });
+        let record = each_ray(|r: &Ray, t: Real, o: &mut (f32, u32)| {
             *o = match agg.intersect(r, 0.0, t) {
                 Some(h) => (h.t as f32, h.prim),
                 None => (f32::INFINITY, u32::MAX),
             }
-        };
-        let any = |r: &Ray, t: Real, o: &mut (f32, u32)| {
+        });
+        let any = each_ray(|r: &Ray, t: Real, o: &mut (f32, u32)| {
             o.1 = if agg.occluded(r, 0.0, t) { 0 } else { u32::MAX }
+        });
+        let record_stream = |rays: &[(Ray, Real)], out: &mut [(f32, u32)]| {
+            let (rays, t) = as_stream(rays);
+            let mut hits = vec![None; rays.len()];
+            agg.intersect_many(&rays, 0.0, t, &mut hits);
+            for (o, h) in out.iter_mut().zip(hits) {
+                *o = match h {
+                    Some(h) => (h.t as f32, h.prim),
+                    None => (f32::INFINITY, u32::MAX),
+                }
+            }
+        };
+        let any_stream = |rays: &[(Ray, Real)], out: &mut [(f32, u32)]| {
+            let (rays, t) = as_stream(rays);
+            let mut hits = vec![false; rays.len()];
+            agg.occluded_many(&rays, 0.0, t, &mut hits);
+            for (o, h) in out.iter_mut().zip(hits) {
+                o.1 = if h { 0 } else { u32::MAX }
+            }
         };
         let mut stored = vec![(0f32, 0u32); set.rays.len()];
         let mut parts = Vec::new();
@@ -313,10 +352,18 @@ fn mesh(dir: &Path, quick: bool) {
             }
             let (f, hf) = time_rays(&set.rays, threads, secs, &mut stored, &record);
             let (a, ha) = time_rays(&set.rays, threads, secs, &mut stored, &any);
-            assert_eq!(hc, ha, "closest and any hit disagree on {}", set.name);
-            assert_eq!(hc, hf, "nearest and intersect disagree on {}", set.name);
+            let (fs, hfs) = time_rays(&set.rays, threads, secs, &mut stored, &record_stream);
+            let (s, hs) = time_rays(&set.rays, threads, secs, &mut stored, &any_stream);
+            for (what, h) in [
+                ("intersect", hf),
+                ("occluded", ha),
+                ("intersect_many", hfs),
+                ("occluded_many", hs),
+            ] {
+                assert_eq!(hc, h, "nearest and {what} disagree on {}", set.name);
+            }
             parts.push(format!(
-                "{{\"threads\": {threads}, \"closest_mrays\": {c:.4}, \"record_mrays\": {f:.4}, \"any_mrays\": {a:.4}, \"hits\": {hc}}}"
+                "{{\"threads\": {threads}, \"closest_mrays\": {c:.4}, \"record_mrays\": {f:.4}, \"any_mrays\": {a:.4}, \"record_stream_mrays\": {fs:.4}, \"any_stream_mrays\": {s:.4}, \"hits\": {hc}}}"
             ));
         }
         write!(

@@ -170,6 +170,19 @@ impl Shape {
         }
     }
 
+    /// [`Shape::occluded`] for up to [`BATCH`] rays, each with its own `t_max`: bit `r` of
+    /// the result for `rays[r]`. Meshes and definitions walk their trees with the rays
+    /// together where they interleave; other shapes take the rays one by one.
+    fn occluded_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real]) -> u64 {
+        match self {
+            Shape::Mesh(m) => m.occluded_batch(rays, t_min, t_max),
+            Shape::Group(g) => g.occluded_batch(rays, t_min, t_max),
+            _ => (rays.iter().zip(t_max).enumerate()).fold(0, |hits, (r, (ray, &t))| {
+                hits | (self.occluded(ray, t_min, t) as u64) << r
+            }),
+        }
+    }
+
     /// How many surfaces the shape counts as for [`Hit::surface`]: 1 for a primitive or a
     /// mesh (one object, as in POV-Ray), and every surface below for a definition.
     pub fn surfaces(&self) -> u64 {
@@ -313,6 +326,21 @@ impl Instance {
         match &self.xf {
             Some(x) => self.shape.occluded(&x.inv_ray(ray), t_min, t_max),
             None => self.shape.occluded(ray, t_min, t_max),
+        }
+    }
+
+    /// [`Instance::occluded`] for up to [`BATCH`] rays ([`Shape::occluded_batch`]).
+    fn occluded_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real]) -> u64 {
+        match &self.xf {
+            Some(x) => {
+                let mut local = [Ray::new(Vec3::ZERO, Vec3::ONE); BATCH];
+                for (l, r) in local.iter_mut().zip(rays) {
+                    *l = x.inv_ray(r);
+                }
+                self.shape
+                    .occluded_batch(&local[..rays.len()], t_min, t_max)
+            }
+            None => self.shape.occluded_batch(rays, t_min, t_max),
         }
     }
 }
@@ -749,12 +777,14 @@ impl Aggregate {
                 best = Some((0, h));
             }
         } else {
-            self.bvh.traverse(ray, t_min, t_max, false, |k, tmax| match local(k as usize, tmax) {
-                Some(h) => {
-                    best = Some((k as usize, h));
-                    Visit::Hit(h.t)
+            self.bvh.traverse(ray, t_min, t_max, false, |k, tmax| {
+                match local(k as usize, tmax) {
+                    Some(h) => {
+                        best = Some((k as usize, h));
+                        Visit::Hit(h.t)
+                    }
+                    None => Visit::Miss,
                 }
-                None => Visit::Miss,
             });
         }
         let (k, mut h) = best?;
@@ -775,6 +805,12 @@ impl Aggregate {
         {
             return true;
         }
+        self.occluded_bounded(ray, t_min, t_max)
+    }
+
+    /// [`Aggregate::occluded`] among the bounded instances.
+    #[inline]
+    fn occluded_bounded(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
         // A tree of one instance (a scene of one mesh, say): asked directly, without the
         // tree's walk (whose box test `Bvh::traverse` skips for a lone primitive anyway;
         // on the peers bench's one-mesh scene the walk cost another 52 instructions a ray
@@ -797,6 +833,63 @@ impl Aggregate {
 
     /// Whether bounded instance `k` is hit with `t_min < t < t_max`.
     #[inline(always)]
+    /// [`Aggregate::occluded`] for many rays: `out[r]` gets exactly what
+    /// `occluded(&rays[r], t_min, t_max)` returns. Rays go [`BATCH`] at a time: the
+    /// unbounded instances one ray at a time, then the tree's walk with the rays together
+    /// when the tree and its leads are larger than [`INTERLEAVE_ABOVE`] (a scene of one
+    /// mesh: the mesh's own walk, when its tree is), so that one ray's cache misses
+    /// overlap the others' work; each ray takes exactly the steps it takes alone. For a
+    /// renderer's shadow rays, or any caller with many rays to test at once.
+    pub fn occluded_many(&self, rays: &[Ray], t_min: Real, t_max: Real, out: &mut [bool]) {
+        assert_eq!(rays.len(), out.len(), "one output per ray");
+        for (rays, out) in rays.chunks(BATCH).zip(out.chunks_mut(BATCH)) {
+            let hits = self.occluded_batch(rays, t_min, &[t_max; BATCH][..rays.len()]);
+            for (r, o) in out.iter_mut().enumerate() {
+                *o = (hits >> r) & 1 == 1;
+            }
+        }
+    }
+
+    /// [`Aggregate::occluded_many`] for up to [`BATCH`] rays, each with its own `t_max`:
+    /// bit `r` of the result for `rays[r]`.
+    fn occluded_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real]) -> u64 {
+        let mut hits = 0u64;
+        for (r, (ray, &t)) in rays.iter().zip(t_max).enumerate() {
+            if self
+                .unbounded()
+                .iter()
+                .any(|inst| inst.occluded(ray, t_min, t))
+            {
+                hits |= 1 << r;
+            }
+        }
+        // The rays an unbounded instance occludes are walked too (their answer is
+        // already known): the walk takes them all or none.
+        hits | match self.bounded() {
+            0 => 0,
+            // As `occluded`: a tree of one instance is asked directly.
+            1 if self.leads[0].s == 0.0 => self.instances[0].occluded_batch(rays, t_min, t_max),
+            _ if self.interleaves() => self.bvh.traverse_batch_leaves_any(
+                rays,
+                t_min,
+                t_max,
+                |r, first, count, tmax| {
+                    let ray = &rays[r];
+                    match (first..first + count as u32)
+                        .any(|k| self.occludes(k as usize, ray, t_min, tmax))
+                    {
+                        true => Visit::Hit(tmax),
+                        false => Visit::Miss,
+                    }
+                },
+                |first| self.leads.as_ptr().wrapping_add(first as usize).cast(),
+            ),
+            _ => (rays.iter().zip(t_max).enumerate()).fold(0, |hits, (r, (ray, &t))| {
+                hits | (self.occluded_bounded(ray, t_min, t) as u64) << r
+            }),
+        }
+    }
+
     fn occludes(&self, k: usize, ray: &Ray, t_min: Real, t_max: Real) -> bool {
         let lead = &self.leads[k];
         if lead.s != 0.0 {

@@ -598,7 +598,13 @@ fn nearest_reports_the_records_fields() {
     let mut rng = SplitMix(4242);
     let mesh = Arc::new(bumpy_sphere(30, 40, 9));
     let mut scenes: Vec<(Aggregate, f64, &str)> = Vec::new();
-    for (n, with_plane) in [(1, false), (3, true), (100, true), (2000, false), (2000, true)] {
+    for (n, with_plane) in [
+        (1, false),
+        (3, true),
+        (100, true),
+        (2000, false),
+        (2000, true),
+    ] {
         let (agg, extent) = random_scene(&mut rng, n, with_plane);
         scenes.push((agg, extent, "random"));
     }
@@ -656,7 +662,10 @@ fn nearest_reports_the_records_fields() {
             hits += 1;
             prims.insert((lean.surface, lean.prim));
         }
-        assert!(hits > 300, "scene {scene} ({what}): only {hits} of 3000 rays hit");
+        assert!(
+            hits > 300,
+            "scene {scene} ({what}): only {hits} of 3000 rays hit"
+        );
         // Many surfaces and primitives, so that the numbering is compared too (a scene of
         // one primitive has one).
         let want = agg.instances.len().min(20);
@@ -668,7 +677,8 @@ fn nearest_reports_the_records_fields() {
     }
 }
 
-/// Camera rays go through `intersect_many`, which walks rays of a large tree interleaved.
+/// Camera rays go through `intersect_many`, which walks rays of a large tree interleaved
+/// (and shadow rays may go through `occluded_many`, which must answer as `occluded`).
 /// Each must get exactly the hit `intersect` gives it alone: same bits in every field,
 /// on a tree large enough to interleave (mixed shapes, a plane, nested groups) and on a
 /// small one that does not.
@@ -687,12 +697,20 @@ fn interleaved_rays_match_one_at_a_time() {
                 .collect();
             let mut out = vec![None; rays.len()];
             agg.intersect_many(&rays, t_min, t_max, &mut out);
-            for (r, got) in rays.iter().zip(&out) {
+            let mut shadow = vec![false; rays.len()];
+            agg.occluded_many(&rays, t_min, t_max, &mut shadow);
+            for ((r, got), &occluded) in rays.iter().zip(&out).zip(&shadow) {
                 let alone = agg.intersect(r, t_min, t_max);
                 assert_eq!(
                     hit_bits(got),
                     hit_bits(&alone),
                     "n = {n}, call {call}: {r:?} [{t_min}, {t_max}]"
+                );
+                assert_eq!(
+                    occluded,
+                    agg.occluded(r, t_min, t_max),
+                    "n = {n}, call {call}: Aggregate::occluded_many against occluded, {r:?} \
+                     [{t_min}, {t_max}]"
                 );
                 hits += alone.is_some() as usize;
             }
@@ -791,9 +809,11 @@ fn mesh_packs_match_the_scalar_test_bit_for_bit() {
 }
 
 /// A large mesh walks the rays of a batch together (`Mesh::intersect_batch`, through
-/// `Aggregate::intersect_many` when the mesh is the scene's one bounded instance). Each
-/// ray must get exactly what `intersect` gives it alone, with its own interval; on a small
-/// mesh that does not interleave too, with a transform and beside a plane.
+/// `Aggregate::intersect_many` when the mesh is the scene's one bounded instance; and
+/// `Mesh::occluded_batch`, through `Aggregate::occluded_many`, for any hit). Each ray must
+/// get exactly what `intersect` (or `occluded`) gives it alone, with its own interval; on
+/// a small mesh that does not interleave too, with a transform, beside a plane and inside
+/// a definition.
 #[test]
 fn mesh_batches_match_one_ray_at_a_time() {
     let mut rng = SplitMix(41);
@@ -816,12 +836,20 @@ fn mesh_batches_match_one_ray_at_a_time() {
             object_id: 2,
         };
         let turned = Transform::new(&random_affine(&mut rng, 0.3, 1.0)).unwrap();
+        let defined = Instance {
+            shape: Shape::Group(Arc::new(Aggregate::new(vec![placed(Some(turned))]))),
+            xf: None,
+            material: 1,
+            object_id: 1,
+        };
         for agg in [
             Aggregate::new(vec![placed(None)]),
             Aggregate::new(vec![placed(Some(turned))]),
             Aggregate::new(vec![placed(None), plane.clone()]),
+            Aggregate::new(vec![defined]),
         ] {
             let mut hits = 0;
+            let mut occluded = [0, 0];
             for call in 0..120 {
                 let rays: Vec<Ray> = (0..1 + call % 37)
                     .map(|_| {
@@ -838,8 +866,13 @@ fn mesh_batches_match_one_ray_at_a_time() {
                 agg.intersect_many(&rays, 0.0, t_max, &mut out);
                 let mut direct = vec![None; rays.len()];
                 let bounds = vec![t_max; rays.len()];
+                let mut shadow = vec![false; rays.len()];
+                agg.occluded_many(&rays, 0.0, t_max, &mut shadow);
+                let mut shadow_direct = 0u128;
                 for (chunk, (rs, o)) in rays.chunks(16).zip(direct.chunks_mut(16)).enumerate() {
-                    mesh.intersect_batch(rs, 0.0, &bounds[16 * chunk..16 * chunk + rs.len()], o);
+                    let bounds = &bounds[16 * chunk..16 * chunk + rs.len()];
+                    mesh.intersect_batch(rs, 0.0, bounds, o);
+                    shadow_direct |= (mesh.occluded_batch(rs, 0.0, bounds) as u128) << (16 * chunk);
                 }
                 for (k, r) in rays.iter().enumerate() {
                     let alone = agg.intersect(r, 0.0, t_max);
@@ -850,9 +883,24 @@ fn mesh_batches_match_one_ray_at_a_time() {
                         "call {call}, ray {k}, mesh batch"
                     );
                     hits += alone.is_some() as usize;
+                    let alone = agg.occluded(r, 0.0, t_max);
+                    assert_eq!(
+                        shadow[k], alone,
+                        "call {call}, ray {k}: Aggregate::occluded_many against occluded"
+                    );
+                    assert_eq!(
+                        (shadow_direct >> k) & 1 == 1,
+                        mesh.occluded(r, 0.0, t_max),
+                        "call {call}, ray {k}: Mesh::occluded_batch against Mesh::occluded"
+                    );
+                    occluded[alone as usize] += 1;
                 }
             }
             assert!(hits > 500, "only {hits} hits");
+            assert!(
+                occluded.iter().all(|&n| n > 50),
+                "occluded and clear rays both: {occluded:?}"
+            );
         }
     }
 }

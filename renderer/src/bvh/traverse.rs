@@ -214,45 +214,86 @@ impl<const W: usize> Bvh<W> {
         rays: &[Ray],
         t_min: Real,
         t_max: &[Real],
-        mut visit: F,
+        visit: F,
         leaf_at: L,
     ) where
         F: FnMut(usize, u32, u8, Real) -> Visit,
         L: Fn(u32) -> *const u8,
     {
+        self.batch_leaves::<false, F, L>(rays, t_min, t_max, visit, leaf_at);
+    }
+
+    /// [`Bvh::traverse_batch_leaves`] for any hit, as [`Bvh::traverse_leaves`] with `any`
+    /// (leaves first; each ray's walk ends at its first hit): returns the mask of the rays
+    /// that hit something, bit `r` for `rays[r]`. Each ray takes exactly the steps it
+    /// takes alone, so the mask is what [`Bvh::traverse_leaves`] returns ray by ray.
+    #[inline]
+    pub fn traverse_batch_leaves_any<F, L>(
+        &self,
+        rays: &[Ray],
+        t_min: Real,
+        t_max: &[Real],
+        visit: F,
+        leaf_at: L,
+    ) -> u64
+    where
+        F: FnMut(usize, u32, u8, Real) -> Visit,
+        L: Fn(u32) -> *const u8,
+    {
+        self.batch_leaves::<true, F, L>(rays, t_min, t_max, visit, leaf_at)
+    }
+
+    /// The batch walk for the closest hit or, with `ANY`, any hit; returns the mask of
+    /// the rays that hit something.
+    #[inline]
+    fn batch_leaves<const ANY: bool, F, L>(
+        &self,
+        rays: &[Ray],
+        t_min: Real,
+        t_max: &[Real],
+        mut visit: F,
+        leaf_at: L,
+    ) -> u64
+    where
+        F: FnMut(usize, u32, u8, Real) -> Visit,
+        L: Fn(u32) -> *const u8,
+    {
         assert!(rays.len() <= BATCH && rays.len() == t_max.len());
         if self.nodes.is_empty() || rays.is_empty() {
-            return;
+            return 0;
         }
         if let Some((first, count)) = self.single_leaf() {
+            let mut hits = 0;
             for (r, &t) in t_max.iter().enumerate() {
-                visit(r, first, count, t);
+                if let Visit::Hit(_) = visit(r, first, count, t) {
+                    hits |= 1 << r;
+                }
             }
-            return;
+            return hits;
         }
         let ahead = self.ahead(leaf_at);
         if self.stack_need <= TINY_STACK {
-            self.walk_batch::<TINY_STACK>(rays, t_min, t_max, &mut visit, &ahead);
+            self.walk_batch::<TINY_STACK, ANY>(rays, t_min, t_max, &mut visit, &ahead)
         } else if self.stack_need <= SHORT_STACK {
-            self.walk_batch::<SHORT_STACK>(rays, t_min, t_max, &mut visit, &ahead);
+            self.walk_batch::<SHORT_STACK, ANY>(rays, t_min, t_max, &mut visit, &ahead)
         } else {
-            self.walk_batch::<LONG_STACK>(rays, t_min, t_max, &mut visit, &ahead);
+            self.walk_batch::<LONG_STACK, ANY>(rays, t_min, t_max, &mut visit, &ahead)
         }
     }
 
     #[inline]
-    fn walk_batch<const STACK: usize>(
+    fn walk_batch<const STACK: usize, const ANY: bool>(
         &self,
         rays: &[Ray],
         t_min: Real,
         t_max: &[Real],
         visit: &mut impl FnMut(usize, u32, u8, Real) -> Visit,
         ahead: &impl Fn(u32, u8),
-    ) {
+    ) -> u64 {
         // Slots past the last ray start inactive and are never stepped.
         let mut walks: [Walk; BATCH] = std::array::from_fn(|r| {
             let k = r.min(rays.len() - 1);
-            Walk::new(&rays[k], t_min, t_max[k], true)
+            Walk::new(&rays[k], t_min, t_max[k], !ANY)
         });
         let mut stacks: [ArrayVec<Entry, STACK>; BATCH] = std::array::from_fn(|_| ArrayVec::new());
         let mut active: u64 = (1u64 << rays.len()) - 1;
@@ -266,7 +307,7 @@ impl<const W: usize> Bvh<W> {
                 if !walks[r].step::<_, _, _, false>(
                     &mut stacks[r],
                     &self.nodes,
-                    false,
+                    ANY,
                     &mut |first, count, t| visit(r, first, count, t),
                     ahead,
                 ) {
@@ -274,6 +315,7 @@ impl<const W: usize> Bvh<W> {
                 }
             }
         }
+        (0..rays.len()).fold(0, |hits, r| hits | (walks[r].hit as u64) << r)
     }
 }
 

@@ -395,15 +395,43 @@ impl Mesh {
             t_min,
             t_max,
             true,
-            |first, count, tmax| {
-                for (_, pack, lanes) in self.leaf_packs(first, count) {
-                    if let Some(t) = wr.hit4_any(pack, lanes, t_min, tmax) {
-                        return Visit::Hit(t);
-                    }
-                }
-                Visit::Miss
-            },
+            |first, count, tmax| self.any_in_leaf(&wr, first, count, t_min, tmax),
             |first| self.leaf_at(first),
         )
+    }
+
+    /// [`Mesh::occluded`] for up to [`BATCH`] rays, each with its own `t_max`: bit `r` of
+    /// the result for `rays[r]`. When the mesh interleaves ([`Mesh::interleaves`]) the rays
+    /// walk its tree together ([`Bvh::traverse_batch_leaves_any`]), each taking exactly
+    /// the steps it takes alone; otherwise one at a time.
+    pub fn occluded_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real]) -> u64 {
+        if !self.interleaves() {
+            return (rays.iter().zip(t_max).enumerate()).fold(0, |hits, (r, (ray, &t))| {
+                hits | (self.occluded(ray, t_min, t) as u64) << r
+            });
+        }
+        let mut wrs = [WoopRay::new(&Ray::new(Vec3::ZERO, Vec3::ONE)); BATCH];
+        for (w, r) in wrs.iter_mut().zip(rays) {
+            *w = WoopRay::new(r);
+        }
+        self.bvh.traverse_batch_leaves_any(
+            rays,
+            t_min,
+            t_max,
+            |r, first, count, tmax| self.any_in_leaf(&wrs[r], first, count, t_min, tmax),
+            |first| self.leaf_at(first),
+        )
+    }
+
+    /// Tests a leaf (slots `first..first + count`, starting a pack) pack by pack, and
+    /// stops at the first pack with a hit.
+    #[inline(always)]
+    fn any_in_leaf(&self, wr: &WoopRay, first: u32, count: u8, t_min: Real, t_max: Real) -> Visit {
+        for (_, pack, lanes) in self.leaf_packs(first, count) {
+            if let Some(t) = wr.hit4_any(pack, lanes, t_min, t_max) {
+                return Visit::Hit(t);
+            }
+        }
+        Visit::Miss
     }
 }
