@@ -831,8 +831,6 @@ impl Aggregate {
             })
     }
 
-    /// Whether bounded instance `k` is hit with `t_min < t < t_max`.
-    #[inline(always)]
     /// [`Aggregate::occluded`] for many rays: `out[r]` gets exactly what
     /// `occluded(&rays[r], t_min, t_max)` returns. Rays go [`BATCH`] at a time: the
     /// unbounded instances one ray at a time, then the tree's walk with the rays together
@@ -890,6 +888,8 @@ impl Aggregate {
         }
     }
 
+    /// Whether bounded instance `k` is hit with `t_min < t < t_max`.
+    #[inline(always)]
     fn occludes(&self, k: usize, ray: &Ray, t_min: Real, t_max: Real) -> bool {
         let lead = &self.leads[k];
         if lead.s != 0.0 {
