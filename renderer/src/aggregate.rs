@@ -13,7 +13,7 @@
 //! instances that use it.
 
 use crate::aabb::Aabb;
-use crate::bvh::{Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
+use crate::bvh::{mask_ray_by_ray, Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
 pub use crate::hit::{Hit, RayHit, INHERIT};
 use crate::ray::Ray;
 use crate::real::{Mat3, Real, Vec3};
@@ -177,9 +177,7 @@ impl Shape {
         match self {
             Shape::Mesh(m) => m.occluded_batch(rays, t_min, t_max),
             Shape::Group(g) => g.occluded_batch(rays, t_min, t_max),
-            _ => (rays.iter().zip(t_max).enumerate()).fold(0, |hits, (r, (ray, &t))| {
-                hits | (self.occluded(ray, t_min, t) as u64) << r
-            }),
+            _ => mask_ray_by_ray(rays, t_max, |ray, t| self.occluded(ray, t_min, t)),
         }
     }
 
@@ -288,14 +286,12 @@ impl Instance {
     /// shape walks them together where it has a tree of its own.
     fn local_hit_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real], out: &mut [Option<Hit>]) {
         match &self.xf {
-            Some(x) => {
-                let mut local = [Ray::new(Vec3::ZERO, Vec3::ONE); BATCH];
-                for (l, r) in local.iter_mut().zip(rays) {
-                    *l = x.inv_ray(r);
-                }
-                self.shape
-                    .candidate_batch(&local[..rays.len()], t_min, t_max, out)
-            }
+            Some(x) => self.shape.candidate_batch(
+                &object_rays(x, rays)[..rays.len()],
+                t_min,
+                t_max,
+                out,
+            ),
             None => self.shape.candidate_batch(rays, t_min, t_max, out),
         }
     }
@@ -333,16 +329,23 @@ impl Instance {
     fn occluded_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real]) -> u64 {
         match &self.xf {
             Some(x) => {
-                let mut local = [Ray::new(Vec3::ZERO, Vec3::ONE); BATCH];
-                for (l, r) in local.iter_mut().zip(rays) {
-                    *l = x.inv_ray(r);
-                }
                 self.shape
-                    .occluded_batch(&local[..rays.len()], t_min, t_max)
+                    .occluded_batch(&object_rays(x, rays)[..rays.len()], t_min, t_max)
             }
             None => self.shape.occluded_batch(rays, t_min, t_max),
         }
     }
+}
+
+/// Up to [`BATCH`] rays taken into an instance's object space (the first `rays.len()`
+/// of the result).
+#[inline(always)]
+fn object_rays(x: &Transform, rays: &[Ray]) -> [Ray; BATCH] {
+    let mut local = [Ray::new(Vec3::ZERO, Vec3::ONE); BATCH];
+    for (l, r) in local.iter_mut().zip(rays) {
+        *l = x.inv_ray(r);
+    }
+    local
 }
 
 /// What traversal reads for one bounded instance. Scenes of many spheres place the unit
@@ -867,7 +870,7 @@ impl Aggregate {
             0 => 0,
             // As `occluded`: a tree of one instance is asked directly.
             1 if self.leads[0].s == 0.0 => self.instances[0].occluded_batch(rays, t_min, t_max),
-            _ if self.interleaves() => self.bvh.traverse_batch_leaves_any(
+            _ if self.interleaves() => self.bvh.traverse_batch_leaves::<true, _, _>(
                 rays,
                 t_min,
                 t_max,
@@ -882,9 +885,7 @@ impl Aggregate {
                 },
                 |first| self.leads.as_ptr().wrapping_add(first as usize).cast(),
             ),
-            _ => (rays.iter().zip(t_max).enumerate()).fold(0, |hits, (r, (ray, &t))| {
-                hits | (self.occluded_bounded(ray, t_min, t) as u64) << r
-            }),
+            _ => mask_ray_by_ray(rays, t_max, |ray, t| self.occluded_bounded(ray, t_min, t)),
         }
     }
 

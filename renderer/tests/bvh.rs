@@ -971,7 +971,7 @@ fn visit_every_leaf<const W: usize>(n: usize) {
             assert!(
                 s.iter().all(|&c| c == 1),
                 "{n} boxes in a row, {W} wide, batch ray {r}: visited {s:?} times (each exactly once \
-                 expected; see Bvh::traverse_batch_leaves in renderer/src/bvh.rs)"
+                 expected; see Bvh::traverse_batch_leaves in renderer/src/bvh/traverse.rs)"
             );
         }
     }

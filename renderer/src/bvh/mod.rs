@@ -25,6 +25,7 @@ mod testing;
 mod traverse;
 
 use crate::aabb::Aabb;
+use crate::ray::Ray;
 use crate::real::Real;
 use build::build_binary;
 use collapse::collapse;
@@ -196,6 +197,16 @@ pub const INTERLEAVE_ABOVE: usize = 1 << 20;
 /// scene (renderer/docs/performance.md): 4 rays took 6.1 ms, 8 took 5.7 ms and 16 took
 /// 5.0 ms, against 10.1 ms one ray at a time, in one run.
 pub const BATCH: usize = 16;
+
+/// The hit mask of a batch asked one ray at a time: bit `r` set when `hit(&rays[r],
+/// t_max[r])`. What the batch calls fall back on where the rays are not walked
+/// together.
+#[inline(always)]
+pub fn mask_ray_by_ray(rays: &[Ray], t_max: &[Real], hit: impl Fn(&Ray, Real) -> bool) -> u64 {
+    (rays.iter().zip(t_max).enumerate()).fold(0, |hits, (r, (ray, &t))| {
+        hits | (hit(ray, t) as u64) << r
+    })
+}
 
 // As the node test's (node.rs, which says why): these run in the f32 build on x86_64.
 #[cfg(all(test, target_arch = "x86_64", not(feature = "f64")))]

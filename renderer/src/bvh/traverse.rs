@@ -197,56 +197,23 @@ impl<const W: usize> Bvh<W> {
         F: FnMut(usize, u32, Real) -> Visit,
         L: Fn(u32) -> *const u8,
     {
-        self.traverse_batch_leaves(
+        self.traverse_batch_leaves::<false, _, _>(
             rays,
             t_min,
             t_max,
             |r, first, count, t| each(false, &mut |i, t| visit(r, i, t))(first, count, t),
             leaf_at,
-        )
+        );
     }
 
     /// [`Bvh::traverse_batch`] a leaf at a time, as [`Bvh::traverse_leaves`]:
-    /// `visit(r, first, count, t_max)` tests a leaf against `rays[r]`.
+    /// `visit(r, first, count, t_max)` tests a leaf against `rays[r]`. For the closest
+    /// hit or, with `ANY`, any hit (as [`Bvh::traverse_leaves`] with `any`: leaves first,
+    /// each ray's walk ends at its first hit). Returns the mask of the rays that hit
+    /// something, bit `r` for `rays[r]`; each ray takes exactly the steps it takes alone,
+    /// so the mask is what [`Bvh::traverse_leaves`] returns ray by ray.
     #[inline]
-    pub fn traverse_batch_leaves<F, L>(
-        &self,
-        rays: &[Ray],
-        t_min: Real,
-        t_max: &[Real],
-        visit: F,
-        leaf_at: L,
-    ) where
-        F: FnMut(usize, u32, u8, Real) -> Visit,
-        L: Fn(u32) -> *const u8,
-    {
-        self.batch_leaves::<false, F, L>(rays, t_min, t_max, visit, leaf_at);
-    }
-
-    /// [`Bvh::traverse_batch_leaves`] for any hit, as [`Bvh::traverse_leaves`] with `any`
-    /// (leaves first; each ray's walk ends at its first hit): returns the mask of the rays
-    /// that hit something, bit `r` for `rays[r]`. Each ray takes exactly the steps it
-    /// takes alone, so the mask is what [`Bvh::traverse_leaves`] returns ray by ray.
-    #[inline]
-    pub fn traverse_batch_leaves_any<F, L>(
-        &self,
-        rays: &[Ray],
-        t_min: Real,
-        t_max: &[Real],
-        visit: F,
-        leaf_at: L,
-    ) -> u64
-    where
-        F: FnMut(usize, u32, u8, Real) -> Visit,
-        L: Fn(u32) -> *const u8,
-    {
-        self.batch_leaves::<true, F, L>(rays, t_min, t_max, visit, leaf_at)
-    }
-
-    /// The batch walk for the closest hit or, with `ANY`, any hit; returns the mask of
-    /// the rays that hit something.
-    #[inline]
-    fn batch_leaves<const ANY: bool, F, L>(
+    pub fn traverse_batch_leaves<const ANY: bool, F, L>(
         &self,
         rays: &[Ray],
         t_min: Real,

@@ -3,7 +3,7 @@
 
 use super::triangle::{surface, TriPack, WoopRay};
 use crate::aabb::Aabb;
-use crate::bvh::{Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
+use crate::bvh::{mask_ray_by_ray, Bvh, Visit, BATCH, INTERLEAVE_ABOVE};
 use crate::hit::{Hit, RayHit};
 use crate::ray::Ray;
 use crate::real::{Real, Vec2, Vec3};
@@ -295,7 +295,7 @@ impl Mesh {
             *w = WoopRay::new(r);
         }
         let mut best: [Option<Candidate>; BATCH] = [None; BATCH];
-        self.bvh.traverse_batch_leaves(
+        self.bvh.traverse_batch_leaves::<false, _, _>(
             rays,
             t_min,
             t_max,
@@ -402,19 +402,17 @@ impl Mesh {
 
     /// [`Mesh::occluded`] for up to [`BATCH`] rays, each with its own `t_max`: bit `r` of
     /// the result for `rays[r]`. When the mesh interleaves ([`Mesh::interleaves`]) the rays
-    /// walk its tree together ([`Bvh::traverse_batch_leaves_any`]), each taking exactly
+    /// walk its tree together ([`Bvh::traverse_batch_leaves`] with `ANY`), each taking exactly
     /// the steps it takes alone; otherwise one at a time.
     pub fn occluded_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real]) -> u64 {
         if !self.interleaves() {
-            return (rays.iter().zip(t_max).enumerate()).fold(0, |hits, (r, (ray, &t))| {
-                hits | (self.occluded(ray, t_min, t) as u64) << r
-            });
+            return mask_ray_by_ray(rays, t_max, |ray, t| self.occluded(ray, t_min, t));
         }
         let mut wrs = [WoopRay::new(&Ray::new(Vec3::ZERO, Vec3::ONE)); BATCH];
         for (w, r) in wrs.iter_mut().zip(rays) {
             *w = WoopRay::new(r);
         }
-        self.bvh.traverse_batch_leaves_any(
+        self.bvh.traverse_batch_leaves::<true, _, _>(
             rays,
             t_min,
             t_max,
