@@ -286,12 +286,10 @@ impl Instance {
     /// shape walks them together where it has a tree of its own.
     fn local_hit_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real], out: &mut [Option<Hit>]) {
         match &self.xf {
-            Some(x) => self.shape.candidate_batch(
-                &object_rays(x, rays)[..rays.len()],
-                t_min,
-                t_max,
-                out,
-            ),
+            Some(x) => {
+                self.shape
+                    .candidate_batch(&object_rays(x, rays)[..rays.len()], t_min, t_max, out)
+            }
             None => self.shape.candidate_batch(rays, t_min, t_max, out),
         }
     }
@@ -328,10 +326,9 @@ impl Instance {
     /// [`Instance::occluded`] for up to [`BATCH`] rays ([`Shape::occluded_batch`]).
     fn occluded_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real]) -> u64 {
         match &self.xf {
-            Some(x) => {
-                self.shape
-                    .occluded_batch(&object_rays(x, rays)[..rays.len()], t_min, t_max)
-            }
+            Some(x) => self
+                .shape
+                .occluded_batch(&object_rays(x, rays)[..rays.len()], t_min, t_max),
             None => self.shape.occluded_batch(rays, t_min, t_max),
         }
     }

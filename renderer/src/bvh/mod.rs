@@ -203,9 +203,8 @@ pub const BATCH: usize = 16;
 /// together.
 #[inline(always)]
 pub fn mask_ray_by_ray(rays: &[Ray], t_max: &[Real], hit: impl Fn(&Ray, Real) -> bool) -> u64 {
-    (rays.iter().zip(t_max).enumerate()).fold(0, |hits, (r, (ray, &t))| {
-        hits | (hit(ray, t) as u64) << r
-    })
+    (rays.iter().zip(t_max).enumerate())
+        .fold(0, |hits, (r, (ray, &t))| hits | (hit(ray, t) as u64) << r)
 }
 
 // As the node test's (node.rs, which says why): these run in the f32 build on x86_64.
