@@ -755,7 +755,7 @@ impl Aggregate {
     pub fn nearest(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<RayHit> {
         // A scene of one instance (one mesh, say) is asked directly, outside the frame of
         // the instance tree's walk (its stacks and saved registers), which stays out of
-        // line: on the peers bench's one-mesh scene this took 50 instructions off a
+        // line: on the peers bench's one-mesh scene this took 69 instructions off a
         // coherent ray's 1,403 (Callgrind), and one thread traced 1.014-1.031x as fast
         // (four alternating pairs; bounce rays 0.99-1.02x).
         if let [inst] = self.instances.as_slice() {
@@ -817,21 +817,6 @@ impl Aggregate {
 
     /// Whether anything is hit with `t_min < t < t_max`.
     pub fn occluded(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
-        // As in `nearest`: one instance is asked outside the general path's frame (the
-        // peers bench's shadow rays: 1,122 → 1,095 instructions a ray, the same time;
-        // the count gate's frames of many instances +0.1-0.2 %, the call to the general
-        // path).
-        if let [inst] = self.instances.as_slice() {
-            if self.bounded() == 1 && self.leads[0].s == 0.0 {
-                return inst.occluded(ray, t_min, t_max);
-            }
-        }
-        self.occluded_in_tree(ray, t_min, t_max)
-    }
-
-    /// [`Aggregate::occluded`] over the unbounded instances and the instance tree.
-    #[inline(never)]
-    fn occluded_in_tree(&self, ray: &Ray, t_min: Real, t_max: Real) -> bool {
         if self
             .unbounded()
             .iter()
