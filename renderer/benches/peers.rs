@@ -226,7 +226,7 @@ fn each_ray(
 
 /// What a [`Store`] keeps of a closest hit, its distance and primitive: `f32::INFINITY`
 /// and `u32::MAX` on a miss.
-fn stored(hit: Option<(Real, u32)>) -> (f32, u32) {
+fn as_stored(hit: Option<(Real, u32)>) -> (f32, u32) {
     match hit {
         Some((t, prim)) => (t as f32, prim),
         None => (f32::INFINITY, u32::MAX),
@@ -311,10 +311,10 @@ fn mesh(dir: &Path, quick: bool) {
         // single-ray Embree figures (Embree 4 has no stream call; its packets are not in
         // embreex).
         let closest = each_ray(|r: &Ray, t: Real, o: &mut (f32, u32)| {
-            *o = stored(std::hint::black_box(agg.nearest(r, 0.0, t)).map(|h| (h.t, h.prim)))
+            *o = as_stored(std::hint::black_box(agg.nearest(r, 0.0, t)).map(|h| (h.t, h.prim)))
         });
         let record = each_ray(|r: &Ray, t: Real, o: &mut (f32, u32)| {
-            *o = stored(agg.intersect(r, 0.0, t).map(|h| (h.t, h.prim)))
+            *o = as_stored(agg.intersect(r, 0.0, t).map(|h| (h.t, h.prim)))
         });
         let any = each_ray(|r: &Ray, t: Real, o: &mut (f32, u32)| {
             o.1 = if agg.occluded(r, 0.0, t) { 0 } else { u32::MAX }
@@ -324,7 +324,7 @@ fn mesh(dir: &Path, quick: bool) {
             let mut hits = vec![None; rays.len()];
             agg.intersect_many(&rays, 0.0, t, &mut hits);
             for (o, h) in out.iter_mut().zip(hits) {
-                *o = stored(h.map(|h| (h.t, h.prim)))
+                *o = as_stored(h.map(|h| (h.t, h.prim)))
             }
         };
         let any_stream = |rays: &[(Ray, Real)], out: &mut [(f32, u32)]| {

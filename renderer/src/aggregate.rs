@@ -790,8 +790,9 @@ impl Aggregate {
             }
         };
         if self.bounded() == 1 {
-            // One bounded instance (a scene of one mesh): asked directly, without the
-            // tree's walk, as `occluded` does.
+            // One bounded instance beside planes, or a lone uniformly scaled sphere (a
+            // lone instance of any other kind took the shortcut in `nearest`): asked
+            // directly, without the tree's walk, as `occluded` does.
             if let Some(h) = local(0, t_max) {
                 best = Some((0, h));
             }

@@ -211,11 +211,21 @@ fn random_ray(rng: &mut SplitMix, agg: &Aggregate, extent: f64) -> (Ray, Real, R
     (Ray::new(o, vec3(d)), t_min, t_max)
 }
 
-/// BVH and brute force agree on the first hit and on occlusion.
+/// BVH and brute force agree on the first hit and on occlusion, and `Aggregate::nearest`
+/// reports the bits of `intersect`'s record.
 #[track_caller]
 fn agree(agg: &Aggregate, r: &Ray, t_min: Real, t_max: Real, what: &str) -> bool {
     let bf = agg.intersect_brute_force(r, t_min, t_max);
     let bv = agg.intersect(r, t_min, t_max);
+    let bits = |v: Vec3| v.to_array().map(Real::to_bits);
+    assert_eq!(
+        agg.nearest(r, t_min, t_max)
+            .map(|h| (h.t.to_bits(), bits(h.n_geo), h.surface, h.prim)),
+        bv.map(|h| (h.t.to_bits(), bits(h.n_geo), h.surface, h.prim)),
+        "Aggregate::nearest's (t, n_geo, surface, prim) differ from intersect's record \
+         (renderer/src/aggregate.rs: nearest, its lone-instance shortcut, nearest_in_tree): \
+         {what} {r:?} [{t_min}, {t_max}]"
+    );
     match (bv, bf) {
         (None, None) => {}
         (Some(a), Some(b)) => {
@@ -591,8 +601,9 @@ fn hit_bits(h: &Option<Hit>) -> Option<HitBits> {
 /// `intersect`'s search: its distance, geometric normal, surface and primitive are the
 /// bits of `intersect`'s record, and it finds nothing exactly when `intersect` does, on
 /// random scenes (meshes, definitions, planes, general and uniformly scaled instances,
-/// placed or not) and on one placed mesh, where its barycentrics are the record's uv (the
-/// mesh has none of its own).
+/// placed or not) and on one mesh, placed and not (the lone-instance shortcut of
+/// `Aggregate::nearest`), where its barycentrics are the record's uv (the mesh has none
+/// of its own).
 #[test]
 fn nearest_reports_the_records_fields() {
     let mut rng = SplitMix(4242);
@@ -630,6 +641,13 @@ fn nearest_reports_the_records_fields() {
         object_id: 1,
     };
     scenes.push((Aggregate::new(vec![placed]), 3.0, "one placed mesh"));
+    let unplaced = Instance {
+        shape: Shape::Mesh(mesh.clone()),
+        xf: None,
+        material: 0,
+        object_id: 1,
+    };
+    scenes.push((Aggregate::new(vec![unplaced]), 3.0, "one mesh"));
     for (scene, (agg, extent, what)) in scenes.iter().enumerate() {
         let (mut hits, mut prims) = (0, std::collections::HashSet::new());
         for i in 0..3000 {
@@ -652,7 +670,7 @@ fn nearest_reports_the_records_fields() {
                 "{at}: Aggregate::nearest's (t, n_geo, surface, prim) differ from intersect's \
                  record (its search, or the normal's mapping in finish_nearest)"
             );
-            if *what == "one placed mesh" {
+            if matches!(*what, "one placed mesh" | "one mesh") {
                 assert_eq!(
                     lean.b.to_array().map(Real::to_bits),
                     full.uv.to_array().map(Real::to_bits),
@@ -952,7 +970,7 @@ fn visit_every_leaf<const W: usize>(n: usize) {
         assert!(
             seen.iter().all(|&c| c == 1),
             "{n} boxes in a row, {W} wide: the ray along the row visited them {seen:?} times \
-             (each exactly once expected; see Bvh::traverse_leaves in renderer/src/bvh.rs)"
+             (each exactly once expected; see Bvh::traverse_leaves in renderer/src/bvh/traverse.rs)"
         );
         let rays = vec![ray; renderer::bvh::BATCH];
         let t_max = vec![INF; rays.len()];
@@ -1012,7 +1030,7 @@ fn spread_walls_cost_a_ray_one_test() {
             s,
             vec![k],
             "a ray from the middle of the room along {d}: build_spread tested walls {s:?}, \
-             only the one it faces ({k}) expected (renderer/src/bvh.rs build_binary)"
+             only the one it faces ({k}) expected (renderer/src/bvh/build.rs build_binary)"
         );
         let p = tests(&plain, d);
         assert!(
@@ -1071,7 +1089,7 @@ fn spread_only_where_the_sah_says() {
         s,
         vec![4],
         "four boxes of 7/8 of the set's box: one leaf of four expected, got leaves {s:?} \
-         (the SAH price of a spread node in renderer/src/bvh.rs build_binary)"
+         (the SAH price of a spread node in renderer/src/bvh/build.rs build_binary)"
     );
     // Slabs z in [0, 1/4] and [3/4, 1] of the unit cube: each 3/6 of its area.
     let tie = build(&[
@@ -1083,7 +1101,7 @@ fn spread_only_where_the_sah_says() {
         s,
         vec![2],
         "two slabs whose spread node costs exactly the leaf's 2: the leaf expected, got \
-         leaves {s:?} (renderer/src/bvh.rs build_binary: a tie keeps the leaf)"
+         leaves {s:?} (renderer/src/bvh/build.rs build_binary: a tie keeps the leaf)"
     );
     let cross = build(&[
         aabb([0.0, -1.0, -1.0], [0.0, 1.0, 1.0]),
@@ -1095,7 +1113,7 @@ fn spread_only_where_the_sah_says() {
         s,
         vec![1],
         "three crossing slabs with one centroid, a ray through one of them: one leaf of \
-         one expected, got leaves {s:?} (renderer/src/bvh.rs build_binary: a spread set \
+         one expected, got leaves {s:?} (renderer/src/bvh/build.rs build_binary: a spread set \
          with no binned split is cut by halves)"
     );
 }
@@ -1136,7 +1154,7 @@ fn fill_packs<const ALIGN: usize>(boxes: &[renderer::aabb::Aabb]) {
     assert!(
         fill > 0.9,
         "{used} triangles took {} slots in packs of {ALIGN} ({:.0} % full, over 90 % \
-         expected): the SAH of Bvh::build_aligned (renderer/src/bvh.rs, build_binary and \
+         expected): the SAH of Bvh::build_aligned (renderer/src/bvh/build.rs, build_binary and \
          best_split) should price a leaf by its packs",
         slots.len(),
         100.0 * fill
@@ -1173,12 +1191,12 @@ fn aligned_leaves_hold_at_most_two_packs() {
         counts.iter().map(|&c| c as usize).sum::<usize>(),
         12,
         "a ray through twelve overlapping triangles met leaves of {counts:?}: it should \
-         meet each triangle once (Bvh::traverse_leaves in renderer/src/bvh.rs)"
+         meet each triangle once (Bvh::traverse_leaves in renderer/src/bvh/traverse.rs)"
     );
     assert!(
         counts.iter().all(|&c| c <= 8),
         "twelve overlapping triangles went to leaves of {counts:?}: a leaf of a mesh holds \
-         at most two packs of four (build_binary in renderer/src/bvh.rs)"
+         at most two packs of four (build_binary in renderer/src/bvh/build.rs)"
     );
     // Two clusters of three small boxes, far apart: six would fit in one leaf of two
     // packs, but two leaves of one pack each cost far less by the SAH.
@@ -1196,7 +1214,7 @@ fn aligned_leaves_hold_at_most_two_packs() {
         counts,
         [3],
         "a ray through one of two far-apart clusters of three met leaves of {counts:?}: \
-         the SAH should split them apart (build_binary in renderer/src/bvh.rs)"
+         the SAH should split them apart (build_binary in renderer/src/bvh/build.rs)"
     );
     // Sixteen far-apart clusters of eight overlapping triangles: split, a cluster's halves
     // would each cover nearly all of it (a node plus two packs' tests, against two packs
@@ -1217,7 +1235,7 @@ fn aligned_leaves_hold_at_most_two_packs() {
     assert!(
         counts.iter().all(|&c| c == 8),
         "rays through sixteen clusters of eight overlapping triangles met leaves of \
-         {counts:?} (8 each, two full packs, expected: build_binary in renderer/src/bvh.rs \
+         {counts:?} (8 each, two full packs, expected: build_binary in renderer/src/bvh/build.rs \
          lets a leaf hold two packs)"
     );
 }

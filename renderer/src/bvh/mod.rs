@@ -202,7 +202,11 @@ pub const BATCH: usize = 16;
 /// t_max[r])`. What the batch calls fall back on where the rays are not walked
 /// together.
 #[inline(always)]
-pub fn mask_ray_by_ray(rays: &[Ray], t_max: &[Real], hit: impl Fn(&Ray, Real) -> bool) -> u64 {
+pub(crate) fn mask_ray_by_ray(
+    rays: &[Ray],
+    t_max: &[Real],
+    hit: impl Fn(&Ray, Real) -> bool,
+) -> u64 {
     (rays.iter().zip(t_max).enumerate())
         .fold(0, |hits, (r, (ray, &t))| hits | (hit(ray, t) as u64) << r)
 }
