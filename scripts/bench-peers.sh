@@ -8,7 +8,7 @@
 # gives. Installs POV-Ray and libLLVM 19 (apt-get) and Mitsuba, numpy and embreex (pip)
 # when they are missing. Writes ${CARGO_TARGET_DIR:-target}/bench-peers/peers.md and peers.json.
 #
-#   scripts/bench-peers.sh                  the full run (about two hours here, most of it Mitsuba)
+#   scripts/bench-peers.sh                  the full run (31 minutes on a 2-core Zen 5, two hours on a Xeon; most of it Mitsuba)
 #   scripts/bench-peers.sh --quick          small sizes and one pair each (a few minutes)
 #   scripts/bench-peers.sh --only embree,growth     some of embree, povray, mitsuba, growth
 #   scripts/bench-peers.sh --write-docs     also put the table into renderer/docs/performance.md
