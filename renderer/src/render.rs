@@ -437,12 +437,9 @@ impl RowTracer<'_> {
             if n == 0 {
                 return;
             }
-            scene.root.intersect_many_for_shading(
-                &rays[..n],
-                0.0,
-                Real::INFINITY,
-                &mut hits[..n],
-            );
+            scene
+                .root
+                .intersect_many_for_shading(&rays[..n], 0.0, Real::INFINITY, &mut hits[..n]);
             for k in 0..n {
                 let (pi, ps, pn) = ids[k];
                 let c = match (self.classic, &mut samplers[k]) {

@@ -1265,7 +1265,7 @@ fn meshes_give_their_triangles_back_in_the_given_order() {
     );
 }
 
-/// A small scene of spheres, rectangles, disks and planes is searched in lanes by
+/// A small scene of spheres, cubes, rectangles, disks and planes is searched in lanes by
 /// `intersect_many` (aggregate/lanes.rs): every ray must get exactly the hit `intersect`
 /// gives it alone, on scenes with general affine instances, unplaced ones, spheres placed
 /// by a scale and a translation (the aggregate's leads), planes beside the tree, and
@@ -1276,12 +1276,17 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
     let mut hits = 0;
     let mut scenes_in_lanes = 0;
     for scene in 0..300 {
-        let n = 1 + rng.below(6);
+        let n = 1 + rng.below(8);
         let extent = 2.0 + 2.0 * (n as f64).cbrt();
         let mut instances: Vec<Instance> = (0..n)
             .map(|i| {
-                let shape = [Shape::Sphere, Shape::Rectangle, Shape::Disk, Shape::Plane]
-                    [rng.below(4)]
+                let shape = [
+                    Shape::Sphere,
+                    Shape::Cube,
+                    Shape::Rectangle,
+                    Shape::Disk,
+                    Shape::Plane,
+                ][rng.below(5)]
                 .clone();
                 let xf = match rng.below(10) {
                     0 => None,
@@ -1319,9 +1324,9 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
                 rays.push(Ray::new(Vec3::ZERO, Vec3::new(0.0, Real::INFINITY, 1.0)));
             }
             if call < 4 {
-                // From points exactly on the unplaced sphere and the plane y = 0: a root
-                // exactly at t = 0, on the interval's open end when t_min is 0.
-                for o in [Vec3::X, Vec3::NEG_Y, Vec3::new(0.25, 0.0, -0.5)] {
+                // From points exactly on the unplaced sphere, cube and plane y = 0: a
+                // root exactly at t = 0, on the interval's open end when t_min is 0.
+                for o in [Vec3::X, Vec3::NEG_Y, Vec3::new(0.25, 0.0, -0.5), Vec3::ONE] {
                     rays.push(Ray::new(o, vec3(rng.unit())));
                 }
             }
@@ -1331,7 +1336,6 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
                 let alone = agg.intersect_for_shading(r, t_min, t_max);
                 assert_eq!(
                     hit_bits(got),
-
                     hit_bits(&alone),
                     "scene {scene} (in lanes: {in_lanes}), call {call}: {r:?} [{t_min}, {t_max}]: \
                      the lanes' search (renderer/src/aggregate/lanes.rs) differs from intersect"
@@ -1340,6 +1344,39 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
             }
         }
     }
-    assert!(scenes_in_lanes > 200, "only {scenes_in_lanes} of 300 scenes in lanes");
+    assert!(
+        scenes_in_lanes > 200,
+        "only {scenes_in_lanes} of 300 scenes in lanes"
+    );
     assert!(hits > 1500, "only {hits} rays hit");
+}
+
+/// A ray with a NaN in its origin or its direction hits nothing, in every search, on
+/// trees of every size (it once overflowed the walk's stack: the slab test ignores a NaN
+/// product, so every lane overlapped, the empty ones too; bvh/traverse.rs, `Walk::new`).
+#[test]
+fn rays_with_a_nan_hit_nothing() {
+    let mut rng = SplitMix(5150);
+    let nan = Real::NAN;
+    let rays = [
+        Ray::new(Vec3::splat(nan), Vec3::X),
+        Ray::new(Vec3::new(0.0, nan, 0.0), Vec3::Z),
+        Ray::new(Vec3::ZERO, Vec3::new(1.0, nan, 0.0)),
+        Ray::new(Vec3::ONE, Vec3::splat(nan)),
+    ];
+    for n in [2, 9, 300, 40_000] {
+        let (agg, _) = random_scene(&mut rng, n, n % 2 == 1);
+        for r in &rays {
+            let what = format!("n = {n}, {r:?}");
+            assert!(agg.intersect(r, 0.0, INF).is_none(), "{what}: intersect");
+            assert!(agg.nearest(r, 0.0, INF).is_none(), "{what}: nearest");
+            assert!(!agg.occluded(r, 0.0, INF), "{what}: occluded");
+        }
+        let mut out = vec![None; rays.len()];
+        agg.intersect_many(&rays, 0.0, INF, &mut out);
+        assert!(out.iter().all(Option::is_none), "n = {n}: intersect_many");
+        let mut shadow = vec![true; rays.len()];
+        agg.occluded_many(&rays, 0.0, INF, &mut shadow);
+        assert!(shadow.iter().all(|s| !s), "n = {n}: occluded_many");
+    }
 }

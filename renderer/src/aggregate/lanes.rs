@@ -3,7 +3,7 @@
 //! rays' components, which the compiler turns into vector instructions (8 rays a
 //! register at `f32`).
 //!
-//! A scene of a few canonical primitives (a floor, a light, a sphere: most of the physical
+//! A scene of a few canonical primitives (a floor, a light, a sphere, a box: most of the physical
 //! catalog) pays more for the tree walk than for the tests themselves. Here every instance
 //! is tested in turn with no tree at all, and each ray keeps the smallest `t`. The tests
 //! are the scalar ones written lane by lane with the same operations in the same order
@@ -22,12 +22,13 @@ use crate::real::{Mat3, Real, Vec3};
 
 /// The most instances an aggregate may hold to be searched in lanes: above it, the tree
 /// skips more tests than the lanes save.
-pub(super) const MAX_INSTANCES: usize = 6;
+pub(super) const MAX_INSTANCES: usize = 8;
 
 /// What lanes can test: the canonical shapes whose tests are written lane by lane.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Kind {
     Sphere,
+    Cube,
     Rectangle,
     Disk,
     Plane,
@@ -53,6 +54,7 @@ pub(super) fn items(instances: &[Instance], leads: &[(Real, Vec3)]) -> Option<Ve
         .map(|(k, inst)| {
             let kind = match inst.shape {
                 Shape::Sphere => Kind::Sphere,
+                Shape::Cube => Kind::Cube,
                 Shape::Rectangle => Kind::Rectangle,
                 Shape::Disk => Kind::Disk,
                 Shape::Plane => Kind::Plane,
@@ -115,11 +117,7 @@ impl Rays {
             d: [[0.0; BATCH]; 3],
         };
         for l in 0..BATCH {
-            let p = [
-                self.o[0][l] - c.x,
-                self.o[1][l] - c.y,
-                self.o[2][l] - c.z,
-            ];
+            let p = [self.o[0][l] - c.x, self.o[1][l] - c.y, self.o[2][l] - c.z];
             let v = [self.d[0][l], self.d[1][l], self.d[2][l]];
             for r in 0..3 {
                 out.o[r][l] = cols[0][r] * p[0] + cols[1][r] * p[1] + cols[2][r] * p[2];
@@ -169,6 +167,32 @@ fn distances(kind: Kind, r: &Rays, t_min: Real, t_max: &L) -> L {
                 let in1 = (t1 > t_min) & (t1 < t_max[l]);
                 let first = if in0 { t0 } else { t1 };
                 t[l] = if (disc >= 0.0) & (in0 | in1) {
+                    first
+                } else {
+                    Real::INFINITY
+                };
+            }
+        }
+        Kind::Cube => {
+            for l in 0..BATCH {
+                // `shapes::cube`'s `crossing`: the slabs of the axes the ray is not
+                // parallel to; one it is parallel to and outside of misses.
+                let (mut near, mut far) = (Real::NEG_INFINITY, Real::INFINITY);
+                let mut outside = false;
+                for k in 0..3 {
+                    let (o, d) = (r.o[k][l], r.d[k][l]);
+                    let parallel = d == 0.0;
+                    outside |= parallel & !((-1.0 <= o) & (o <= 1.0));
+                    let inv = 1.0 / d;
+                    let (a, b) = ((-1.0 - o) * inv, (1.0 - o) * inv);
+                    let (a, b) = if a > b { (b, a) } else { (a, b) };
+                    near = if !parallel & (a > near) { a } else { near };
+                    far = if !parallel & (b < far) { b } else { far };
+                }
+                let in_near = (near > t_min) & (near < t_max[l]);
+                let in_far = (far > t_min) & (far < t_max[l]);
+                let first = if in_near { near } else { far };
+                t[l] = if !outside & !(near > far) & (in_near | in_far) {
                     first
                 } else {
                     Real::INFINITY

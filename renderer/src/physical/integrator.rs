@@ -384,9 +384,15 @@ impl<'a> PhysicalIntegrator<'a> {
                 }
             }
             Integrator::Path => match (!self.guides.is_empty(), self.glass) {
-                (true, true) => self.path::<true, true, false>(ray, first, smp, s.max_depth, s.rr_depth),
-                (true, false) => self.path::<true, false, false>(ray, first, smp, s.max_depth, s.rr_depth),
-                (false, true) => self.path::<false, true, false>(ray, first, smp, s.max_depth, s.rr_depth),
+                (true, true) => {
+                    self.path::<true, true, false>(ray, first, smp, s.max_depth, s.rr_depth)
+                }
+                (true, false) => {
+                    self.path::<true, false, false>(ray, first, smp, s.max_depth, s.rr_depth)
+                }
+                (false, true) => {
+                    self.path::<false, true, false>(ray, first, smp, s.max_depth, s.rr_depth)
+                }
                 (false, false) => {
                     self.path::<false, false, false>(ray, first, smp, s.max_depth, s.rr_depth)
                 }
