@@ -635,11 +635,6 @@ impl Walk {
     /// entry distance is below.
     #[inline]
     pub(super) fn new(ray: &Ray, t_min: Real, t_max: Real, eager: bool) -> Self {
-        let t_max = if ray.o.is_nan() || ray.d.is_nan() {
-            Real::NAN
-        } else {
-            t_max
-        };
         let inv = Vec3::ONE / ray.d;
         Walk {
             near: [
