@@ -223,7 +223,7 @@ fn agree(agg: &Aggregate, r: &Ray, t_min: Real, t_max: Real, what: &str) -> bool
             .map(|h| (h.t.to_bits(), bits(h.n_geo), h.surface, h.prim)),
         bv.map(|h| (h.t.to_bits(), bits(h.n_geo), h.surface, h.prim)),
         "Aggregate::nearest's (t, n_geo, surface, prim) differ from intersect's record \
-         (renderer/src/aggregate.rs: nearest, its lone-instance shortcut, nearest_in_tree): \
+         (renderer/src/aggregate/mod.rs: nearest, its lone-instance shortcut, nearest_in_tree): \
          {what} {r:?} [{t_min}, {t_max}]"
     );
     match (bv, bf) {
