@@ -385,8 +385,8 @@ impl RowTracer<'_> {
             Counts::Each(c) => c[i],
         };
         let (scene, w) = (self.scene, self.w);
-        // The row's samples in order, in chunks: the classic model finds a chunk's camera
-        // hits together (Aggregate::intersect_many), then shades them one by one. Each
+        // The row's samples in order, in chunks: both models find a chunk's camera hits
+        // together (Aggregate::intersect_many), then shade them one by one. Each
         // pixel's sum runs over its samples in the same order as one at a time.
         let mut rays = [Ray::new(Vec3::ZERO, Vec3::ONE); CHUNK];
         let mut hits: [Option<Hit>; CHUNK] = [None; CHUNK];
@@ -437,19 +437,14 @@ impl RowTracer<'_> {
             if n == 0 {
                 return;
             }
-            if self.classic {
-                scene.root.intersect_many_for_shading(
-                    &rays[..n],
-                    0.0,
-                    Real::INFINITY,
-                    &mut hits[..n],
-                );
-            }
+            scene
+                .root
+                .intersect_many_for_shading(&rays[..n], 0.0, Real::INFINITY, &mut hits[..n]);
             for k in 0..n {
                 let (pi, ps, pn) = ids[k];
                 let c = match (self.classic, &mut samplers[k]) {
                     (false, Some(smp)) => {
-                        let c = self.physical.li(&rays[k], smp);
+                        let c = self.physical.li(&rays[k], hits[k], smp);
                         dims += u64::from(smp.dimensions());
                         c
                     }

@@ -223,7 +223,7 @@ fn agree(agg: &Aggregate, r: &Ray, t_min: Real, t_max: Real, what: &str) -> bool
             .map(|h| (h.t.to_bits(), bits(h.n_geo), h.surface, h.prim)),
         bv.map(|h| (h.t.to_bits(), bits(h.n_geo), h.surface, h.prim)),
         "Aggregate::nearest's (t, n_geo, surface, prim) differ from intersect's record \
-         (renderer/src/aggregate.rs: nearest, its lone-instance shortcut, nearest_in_tree): \
+         (renderer/src/aggregate/mod.rs: nearest, its lone-instance shortcut, nearest_in_tree): \
          {what} {r:?} [{t_min}, {t_max}]"
     );
     match (bv, bf) {
@@ -1263,4 +1263,89 @@ fn meshes_give_their_triangles_back_in_the_given_order() {
         given,
         "Mesh::triangles_as_given (renderer/src/shapes/mesh.rs) lost the given order"
     );
+}
+
+/// A small scene of spheres, cubes, rectangles, disks and planes is searched in lanes by
+/// `intersect_many` (aggregate/lanes.rs): every ray must get exactly the hit `intersect`
+/// gives it alone, on scenes with general affine instances, unplaced ones, spheres placed
+/// by a scale and a translation (the aggregate's leads), planes beside the tree, and
+/// copies of one instance, where every hit is a tie that the scalar search decides.
+#[test]
+fn small_scenes_in_lanes_match_one_at_a_time() {
+    let mut rng = SplitMix(2611);
+    let mut hits = 0;
+    let mut scenes_in_lanes = 0;
+    for scene in 0..300 {
+        let n = 1 + rng.below(8);
+        let extent = 2.0 + 2.0 * (n as f64).cbrt();
+        let mut instances: Vec<Instance> = (0..n)
+            .map(|i| {
+                let shape = [
+                    Shape::Sphere,
+                    Shape::Cube,
+                    Shape::Rectangle,
+                    Shape::Disk,
+                    Shape::Plane,
+                ][rng.below(5)]
+                .clone();
+                let xf = match rng.below(10) {
+                    0 => None,
+                    // A sphere lead's form: a uniform scale and a translation.
+                    1 | 2 => Some(Affine64 {
+                        m: DMat3::from_diagonal(DVec3::splat(rng.range(0.1, 2.0))),
+                        d: rng.vec(-extent, extent),
+                    }),
+                    _ => Some(random_affine(&mut rng, extent, 1.0)),
+                };
+                Instance {
+                    shape,
+                    xf: xf.map(|a| Transform::new(&a).unwrap()),
+                    material: i as u32,
+                    object_id: i as u32 + 1,
+                }
+            })
+            .collect();
+        if scene % 5 == 0 {
+            // A copy of an instance: its hits tie.
+            let mut copy = instances[rng.below(n)].clone();
+            copy.object_id = 99;
+            instances.push(copy);
+        }
+        let agg = Aggregate::new(instances);
+        let in_lanes = agg.searches_in_lanes();
+        scenes_in_lanes += in_lanes as usize;
+        for call in 0..20 {
+            let (_, t_min, t_max) = random_ray(&mut rng, &agg, extent);
+            let mut rays: Vec<Ray> = (0..1 + (call * 7) % 23)
+                .map(|_| random_ray(&mut rng, &agg, extent).0)
+                .collect();
+            if call == 0 {
+                rays.push(Ray::new(Vec3::ZERO, Vec3::new(0.0, Real::INFINITY, 1.0)));
+            }
+            if call < 4 {
+                // From points exactly on the unplaced sphere, cube and plane y = 0: a
+                // root exactly at t = 0, on the interval's open end when t_min is 0.
+                for o in [Vec3::X, Vec3::NEG_Y, Vec3::new(0.25, 0.0, -0.5), Vec3::ONE] {
+                    rays.push(Ray::new(o, vec3(rng.unit())));
+                }
+            }
+            let mut out = vec![None; rays.len()];
+            agg.intersect_many_for_shading(&rays, t_min, t_max, &mut out);
+            for (r, got) in rays.iter().zip(&out) {
+                let alone = agg.intersect_for_shading(r, t_min, t_max);
+                assert_eq!(
+                    hit_bits(got),
+                    hit_bits(&alone),
+                    "scene {scene} (in lanes: {in_lanes}), call {call}: {r:?} [{t_min}, {t_max}]: \
+                     the lanes' search (renderer/src/aggregate/lanes.rs) differs from intersect"
+                );
+                hits += alone.is_some() as usize;
+            }
+        }
+    }
+    assert!(
+        scenes_in_lanes > 200,
+        "only {scenes_in_lanes} of 300 scenes in lanes"
+    );
+    assert!(hits > 1500, "only {hits} rays hit");
 }

@@ -628,6 +628,11 @@ impl Walk {
 
     /// A walk of `ray` over `(t_min, t_max)`; `eager` as [`Walk::eager`] starts: true for
     /// a search for the closest hit, false for any hit.
+    ///
+    /// A ray with a NaN in its origin or direction overlaps nothing: the slab test ignores
+    /// a NaN product (`Node::hit`), so such a ray would overlap every lane, the empty ones
+    /// too, and overflow the stack. Its interval's end is made NaN instead, which no
+    /// entry distance is below.
     #[inline]
     pub(super) fn new(ray: &Ray, t_min: Real, t_max: Real, eager: bool) -> Self {
         let inv = Vec3::ONE / ray.d;

@@ -357,8 +357,10 @@ impl<'a> PhysicalIntegrator<'a> {
     /// light paths. (Always inlined, with the path loops and what they
     /// call, into the render loop: each out-of-line call there cost a `direct` frame 1–3 %
     /// more instructions.)
+    /// `first` is what the camera ray hits (`Aggregate::intersect_for_shading`), which the
+    /// render loop finds for many camera rays at once (`intersect_many_for_shading`).
     #[inline(always)]
-    pub fn li(&self, ray: &Ray, smp: &mut PixelSampler) -> Color {
+    pub fn li(&self, ray: &Ray, first: Option<Hit>, smp: &mut PixelSampler) -> Color {
         let s = &self.scene.settings;
         let v = match s.integrator {
             // A path with guides is its own loop, so that one without them is compiled
@@ -368,29 +370,35 @@ impl<'a> PhysicalIntegrator<'a> {
             Integrator::Path if self.light.is_some() => {
                 match (!self.guides.is_empty(), self.glass) {
                     (true, true) => {
-                        self.path::<true, true, true>(ray, smp, s.max_depth, s.rr_depth)
+                        self.path::<true, true, true>(ray, first, smp, s.max_depth, s.rr_depth)
                     }
                     (true, false) => {
-                        self.path::<true, false, true>(ray, smp, s.max_depth, s.rr_depth)
+                        self.path::<true, false, true>(ray, first, smp, s.max_depth, s.rr_depth)
                     }
                     (false, true) => {
-                        self.path::<false, true, true>(ray, smp, s.max_depth, s.rr_depth)
+                        self.path::<false, true, true>(ray, first, smp, s.max_depth, s.rr_depth)
                     }
                     (false, false) => {
-                        self.path::<false, false, true>(ray, smp, s.max_depth, s.rr_depth)
+                        self.path::<false, false, true>(ray, first, smp, s.max_depth, s.rr_depth)
                     }
                 }
             }
             Integrator::Path => match (!self.guides.is_empty(), self.glass) {
-                (true, true) => self.path::<true, true, false>(ray, smp, s.max_depth, s.rr_depth),
-                (true, false) => self.path::<true, false, false>(ray, smp, s.max_depth, s.rr_depth),
-                (false, true) => self.path::<false, true, false>(ray, smp, s.max_depth, s.rr_depth),
+                (true, true) => {
+                    self.path::<true, true, false>(ray, first, smp, s.max_depth, s.rr_depth)
+                }
+                (true, false) => {
+                    self.path::<true, false, false>(ray, first, smp, s.max_depth, s.rr_depth)
+                }
+                (false, true) => {
+                    self.path::<false, true, false>(ray, first, smp, s.max_depth, s.rr_depth)
+                }
                 (false, false) => {
-                    self.path::<false, false, false>(ray, smp, s.max_depth, s.rr_depth)
+                    self.path::<false, false, false>(ray, first, smp, s.max_depth, s.rr_depth)
                 }
             },
-            _ if self.glass => self.path::<false, true, false>(ray, smp, 2, u32::MAX),
-            _ => self.path::<false, false, false>(ray, smp, 2, u32::MAX),
+            _ if self.glass => self.path::<false, true, false>(ray, first, smp, 2, u32::MAX),
+            _ => self.path::<false, false, false>(ray, first, smp, 2, u32::MAX),
         };
         Color::new(v.x as f32, v.y as f32, v.z as f32)
     }
@@ -404,6 +412,7 @@ impl<'a> PhysicalIntegrator<'a> {
     fn path<const GUIDED: bool, const GLASS: bool, const LIGHT: bool>(
         &self,
         ray: &Ray,
+        first: Option<Hit>,
         smp: &mut PixelSampler,
         max_depth: u32,
         rr_depth: u32,
@@ -420,13 +429,18 @@ impl<'a> PhysicalIntegrator<'a> {
         let mut caustic = false;
         // The shading normal of the previous vertex, when it had a density (env_pdf).
         let mut prev_n = glam::DVec3::ZERO;
+        // The camera ray's hit is given; the loop finds the others.
+        let mut given = Some(first);
         loop {
             let dir = dv(ray.d).normalize();
-            let Some(hit) = self
-                .scene
-                .root
-                .intersect_for_shading(&ray, t_min, Real::INFINITY)
-            else {
+            let found = match given.take() {
+                Some(first) => first,
+                None => self
+                    .scene
+                    .root
+                    .intersect_for_shading(&ray, t_min, Real::INFINITY),
+            };
+            let Some(hit) = found else {
                 if let Some(env) = self.env {
                     let w = if prev_pdf > 0.0 {
                         mis(prev_pdf, env_pdf(prev_n, dir) * self.select)

@@ -22,6 +22,8 @@ use crate::shapes::{self, Mesh, Triangle};
 use crate::transform::{map_normal, map_point_with_error, Transform};
 use std::sync::Arc;
 
+mod lanes;
+
 /// A primitive or a shared sub-scene, in its own object space.
 #[derive(Clone, Debug)]
 pub enum Shape {
@@ -447,6 +449,9 @@ pub struct Aggregate {
     /// Surfaces below this aggregate ([`Shape::surfaces`] summed), or `u64::MAX` when
     /// that overflows (the scene builder refuses such a scene).
     surfaces: u64,
+    /// The instances as the closest-hit search of many rays tests them in lanes, when
+    /// there are few and every one is a shape lanes can test (lanes.rs).
+    lanes: Option<Vec<lanes::Item>>,
 }
 
 impl Aggregate {
@@ -467,6 +472,8 @@ impl Aggregate {
         }
         let instances: Vec<Instance> = tagged.into_iter().map(|(_, i)| i).collect();
         let (surface_base, surfaces) = surface_offsets(&instances);
+        let lead_maps: Vec<(Real, Vec3)> = leads.iter().map(|l: &Lead| (l.s, l.c)).collect();
+        let lanes = lanes::items(&instances, &lead_maps);
         Aggregate {
             instances,
             leads,
@@ -474,6 +481,7 @@ impl Aggregate {
             scene_order,
             surface_base,
             surfaces,
+            lanes,
         }
     }
 
@@ -536,6 +544,15 @@ impl Aggregate {
             shapes::sphere::intersect_bare(&lead.object_ray(ray), t_min, t_max)
         } else {
             self.instances[k].local_hit(ray, t_min, t_max)
+        }
+    }
+
+    /// [`Aggregate::local_hit`] for any instance `k`, bounded or not.
+    #[inline]
+    fn candidate(&self, k: usize, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+        match k < self.bounded() {
+            true => self.local_hit(k, ray, t_min, t_max),
+            false => self.instances[k].local_hit(ray, t_min, t_max),
         }
     }
 
@@ -666,6 +683,10 @@ impl Aggregate {
         t_max: &[Real],
         out: &mut [Option<Hit>],
     ) {
+        if let Some(items) = &self.lanes {
+            self.intersect_lanes::<UV>(items, rays, t_min, t_max, out);
+            return;
+        }
         if self.bounded() == 1 && self.leads[0].s == 0.0 {
             // One bounded instance (a mesh, a definition): its own tree is the one to
             // walk rays together through, which the instance's batch does. (The single
@@ -725,6 +746,12 @@ impl Aggregate {
                 h
             });
         }
+    }
+
+    /// Whether [`Aggregate::intersect_many`] tests this aggregate's instances in lanes
+    /// (lanes.rs): a few canonical spheres, rectangles, disks and planes.
+    pub fn searches_in_lanes(&self) -> bool {
+        self.lanes.is_some()
     }
 
     /// Whether [`Aggregate::intersect_many`] interleaves rays: whether the BVH nodes and
