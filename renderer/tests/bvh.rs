@@ -1331,13 +1331,23 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
             }
             let mut out = vec![None; rays.len()];
             agg.intersect_many_for_shading(&rays, t_min, t_max, &mut out);
-            for (r, got) in rays.iter().zip(&out) {
+            let mut with_uv = vec![None; rays.len()];
+            agg.intersect_many(&rays, t_min, t_max, &mut with_uv);
+            for ((r, got), got_uv) in rays.iter().zip(&out).zip(&with_uv) {
                 let alone = agg.intersect_for_shading(r, t_min, t_max);
                 assert_eq!(
                     hit_bits(got),
                     hit_bits(&alone),
                     "scene {scene} (in lanes: {in_lanes}), call {call}: {r:?} [{t_min}, {t_max}]: \
-                     the lanes' search (renderer/src/aggregate/lanes.rs) differs from intersect"
+                     the lanes' search (renderer/src/aggregate/lanes.rs) differs from \
+                     intersect_for_shading"
+                );
+                assert_eq!(
+                    hit_bits(got_uv),
+                    hit_bits(&agg.intersect(r, t_min, t_max)),
+                    "scene {scene} (in lanes: {in_lanes}), call {call}: {r:?} [{t_min}, {t_max}]: \
+                     the lanes' search with uv (renderer/src/aggregate/lanes.rs) differs from \
+                     intersect"
                 );
                 hits += alone.is_some() as usize;
             }

@@ -7,9 +7,11 @@
 //! catalog) pays more for the tree walk than for the tests themselves. Here every instance
 //! is tested in turn with no tree at all, and each ray keeps the smallest `t`. The tests
 //! are the scalar ones written lane by lane with the same operations in the same order
-//! (`shapes::flat`, `shapes::sphere`, the transform's `inv_ray`, the lead's `object_ray`),
-//! so each lane computes the bits the scalar test computes; the winner's record is then
-//! built by the scalar test itself. The scalar search keeps the first of equal
+//! (`shapes::flat`, `shapes::sphere`, `shapes::cube`, the transform's `inv_ray`, the lead's
+//! `object_ray`), so each lane computes the bits the scalar test computes; so is the
+//! winner's record, built and mapped out of object space in lanes as the shape and the
+//! instance build and map it (`map_point_with_error`, `map_normal`), for each instance
+//! that some lane's ray hits first. The scalar search keeps the first of equal
 //! distances in the order it visits, which depends on the tree; a lane whose smallest
 //! distance is shared by two instances does not know that order and takes the scalar
 //! search. So each ray gets exactly what [`Aggregate::intersect`] gives it
@@ -18,7 +20,8 @@
 use super::{Aggregate, Hit, Instance, Shape};
 use crate::bvh::BATCH;
 use crate::ray::Ray;
-use crate::real::{Mat3, Real, Vec3};
+use crate::real::{gamma, Mat3, Real, Vec2, Vec3};
+use crate::shapes;
 
 /// The most instances an aggregate may hold to be searched in lanes: above it, the tree
 /// skips more tests than the lanes save.
@@ -34,17 +37,32 @@ enum Kind {
     Plane,
 }
 
-/// An instance as the lanes test it: its shape and the map of a ray into its object
-/// space, `inv·(o − c)` and `inv·d` (none: the ray as it is).
+/// An instance as the lanes test it and finish its hits.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Item {
     kind: Kind,
-    map: Option<(Mat3, Vec3)>,
+    /// `(m⁻¹, m, c)`: the ray goes into object space by `m⁻¹·(o − c)` and `m⁻¹·d`, the
+    /// hit point comes out by `m·p + c` with its error bound, the normal by `m⁻ᵀ` (none:
+    /// object space is this space).
+    xf: Option<(Mat3, Mat3, Vec3)>,
+    material: u32,
+    object_id: u32,
+    /// [`Hit::surface`] of its hits.
+    surface: u64,
 }
 
-/// The lanes' form of an aggregate's instances, in `instances` order; `None` when the
-/// aggregate is too large or holds a shape the lanes cannot test.
-pub(super) fn items(instances: &[Instance], leads: &[(Real, Vec3)]) -> Option<Vec<Item>> {
+/// What the lanes need of an aggregate's bounded instance beyond the instance: its lead's
+/// inverse scale `s` (0: no lead), scale `r` and centre.
+pub(super) type LeadForm = (Real, Real, Vec3);
+
+/// The lanes' form of an aggregate's instances, in `instances` order, with `leads[k]` for
+/// each bounded one and `surface(k)` its surface number; `None` when the aggregate is too
+/// large or holds a shape the lanes cannot test.
+pub(super) fn items(
+    instances: &[Instance],
+    leads: &[LeadForm],
+    surface: impl Fn(usize) -> u64,
+) -> Option<Vec<Item>> {
     if instances.len() > MAX_INSTANCES || instances.is_empty() {
         return None;
     }
@@ -60,13 +78,25 @@ pub(super) fn items(instances: &[Instance], leads: &[(Real, Vec3)]) -> Option<Ve
                 Shape::Plane => Kind::Plane,
                 _ => return None,
             };
-            // A sphere with a lead is searched through it (`Lead::object_ray`): the
-            // diagonal matrix of its scale, about its centre.
-            let map = match leads.get(k) {
-                Some(&(s, c)) if s != 0.0 => Some((Mat3::from_diagonal(Vec3::splat(s)), c)),
-                _ => inst.xf.map(|x| (x.inverse_matrix(), x.translation())),
+            // A sphere with a lead is searched and finished through it (`Lead`): the
+            // diagonal matrices of its scale and inverse scale, about its centre.
+            let xf = match leads.get(k) {
+                Some(&(s, r, c)) if s != 0.0 => Some((
+                    Mat3::from_diagonal(Vec3::splat(s)),
+                    Mat3::from_diagonal(Vec3::splat(r)),
+                    c,
+                )),
+                _ => inst
+                    .xf
+                    .map(|x| (x.inverse_matrix(), x.matrix(), x.translation())),
             };
-            Some(Item { kind, map })
+            Some(Item {
+                kind,
+                xf,
+                material: inst.material,
+                object_id: inst.object_id,
+                surface: surface(k),
+            })
         })
         .collect()
 }
@@ -104,8 +134,8 @@ impl Rays {
     /// compute them: `m·(o − c)` and `m·d` with glam's `Mat3 · Vec3` (the columns times
     /// the components, added from the first).
     #[inline(always)]
-    fn mapped(&self, map: &Option<(Mat3, Vec3)>) -> Rays {
-        let Some((m, c)) = map else {
+    fn mapped(&self, xf: &Option<(Mat3, Mat3, Vec3)>) -> Rays {
+        let Some((m, _, c)) = xf else {
             return Rays {
                 o: self.o,
                 d: self.d,
@@ -224,16 +254,13 @@ fn distances(kind: Kind, r: &Rays, t_min: Real, t_max: &L) -> L {
 const NONE: u32 = u32::MAX;
 const TIE: u32 = u32::MAX - 1;
 
-/// For each ray, the instance whose candidate is closest ([`NONE`], or [`TIE`]), and its
+/// For each lane, the instance whose candidate is closest ([`NONE`], or [`TIE`]), and its
 /// distance.
-fn winners(items: &[Item], rays: &[Ray], t_min: Real, t_max: &[Real]) -> ([u32; BATCH], L) {
-    let lanes = Rays::of(rays);
-    let mut bound = [Real::INFINITY; BATCH];
-    bound[..t_max.len()].copy_from_slice(t_max);
+fn winners(items: &[Item], lanes: &Rays, t_min: Real, bound: &L) -> ([u32; BATCH], L) {
     let mut best_t = [Real::INFINITY; BATCH];
     let mut best = [NONE; BATCH];
     for (k, item) in items.iter().enumerate() {
-        let t = distances(item.kind, &lanes.mapped(&item.map), t_min, &bound);
+        let t = distances(item.kind, &lanes.mapped(&item.xf), t_min, bound);
         for l in 0..BATCH {
             let closer = t[l] < best_t[l];
             let tie = (t[l] == best_t[l]) & (t[l] != Real::INFINITY);
@@ -250,6 +277,153 @@ fn winners(items: &[Item], rays: &[Ray], t_min: Real, t_max: &[Real]) -> ([u32; 
     (best, best_t)
 }
 
+/// The hit records of the lanes, field by field, in object space or mapped out of it.
+struct Records {
+    p: [L; 3],
+    err: [L; 3],
+    n: [L; 3],
+    uv: [L; 2],
+}
+
+impl Records {
+    const ZERO: Records = Records {
+        p: [[0.0; BATCH]; 3],
+        err: [[0.0; BATCH]; 3],
+        n: [[0.0; BATCH]; 3],
+        uv: [[0.0; BATCH]; 2],
+    };
+}
+
+/// Each lane's candidate record of a `kind` at the distance `t` it found (`r` in object
+/// space): the point, its error bound, the normal and the uv that `shapes::flat`,
+/// `shapes::sphere::intersect_bare` and `shapes::cube` build, operation for operation.
+/// (A lane the shape missed gets values nobody reads.)
+#[inline(always)]
+fn records(kind: Kind, r: &Rays, t_min: Real, t_max: &L, t: &L) -> Records {
+    let mut rec = Records::ZERO;
+    match kind {
+        Kind::Sphere => {
+            let g5 = gamma(5);
+            for l in 0..BATCH {
+                // `solve` again, to learn which root the lane took, then `intersect_bare`.
+                let (ox, oy, oz) = (r.o[0][l] as f64, r.o[1][l] as f64, r.o[2][l] as f64);
+                let (dx, dy, dz) = (r.d[0][l] as f64, r.d[1][l] as f64, r.d[2][l] as f64);
+                let a64 = dx * dx + dy * dy + dz * dz;
+                let b64 = ox * dx + oy * dy + oz * dz;
+                let k = b64 / a64;
+                let (lx, ly, lz) = (ox - dx * k, oy - dy * k, oz - dz * k);
+                let disc64 = a64 * (1.0 - (lx * lx + ly * ly + lz * lz));
+                let disc = disc64 as Real;
+                let (a, b) = (a64 as Real, b64 as Real);
+                let (rox, roy, roz) = (r.o[0][l], r.o[1][l], r.o[2][l]);
+                let c = rox * rox + roy * roy + roz * roz - 1.0;
+                let sq = disc.sqrt();
+                let q = -(b + sq.copysign(b));
+                let (r0, r1) = (q / a, c / q);
+                let t0 = if r0 <= r1 { r0 } else { r1 };
+                let t0 = if q == 0.0 { 0.0 } else { t0 };
+                let first = (t0 > t_min) & (t0 < t_max[l]);
+                let side: f64 = if first { -1.0 } else { 1.0 };
+                let f = side * disc64.sqrt() / a64;
+                let p = [
+                    (lx + dx * f) as Real,
+                    (ly + dy * f) as Real,
+                    (lz + dz * f) as Real,
+                ];
+                // `normalize_or(p)`.
+                let rcp = 1.0 / (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+                let unit = (rcp.abs() < Real::INFINITY) & (rcp > 0.0);
+                for c in 0..3 {
+                    let v = if unit { p[c] * rcp } else { p[c] };
+                    rec.p[c][l] = v;
+                    rec.n[c][l] = v;
+                    rec.err[c][l] = v.abs() * g5;
+                }
+            }
+        }
+        Kind::Cube => {
+            let g4 = gamma(4);
+            for l in 0..BATCH {
+                // `crossing` again, for the axis and side of the face, then `intersect`.
+                let (mut near, mut far) = (Real::NEG_INFINITY, Real::INFINITY);
+                let (mut near_axis, mut far_axis) = (0usize, 0usize);
+                for k in 0..3 {
+                    let (o, d) = (r.o[k][l], r.d[k][l]);
+                    let parallel = d == 0.0;
+                    let inv = 1.0 / d;
+                    let (a, b) = ((-1.0 - o) * inv, (1.0 - o) * inv);
+                    let (a, b) = if a > b { (b, a) } else { (a, b) };
+                    let nearer = !parallel & (a > near);
+                    let farther = !parallel & (b < far);
+                    near = if nearer { a } else { near };
+                    near_axis = if nearer { k } else { near_axis };
+                    far = if farther { b } else { far };
+                    far_axis = if farther { k } else { far_axis };
+                }
+                let entering = (near > t_min) & (near < t_max[l]);
+                let axis = if entering { near_axis } else { far_axis };
+                let da = [r.d[0][l], r.d[1][l], r.d[2][l]][axis];
+                let side = if entering { -da.signum() } else { da.signum() };
+                let mut p = [0.0; 3];
+                for c in 0..3 {
+                    let at = r.o[c][l] + r.d[c][l] * t[l];
+                    p[c] = if c == axis { side } else { at };
+                    rec.p[c][l] = p[c];
+                    rec.err[c][l] = if c == axis { 0.0 } else { p[c].abs() * g4 };
+                    rec.n[c][l] = if c == axis { side } else { 0.0 };
+                }
+                rec.uv[0][l] = (p[(axis + 1) % 3] + 1.0) * 0.5;
+                rec.uv[1][l] = (p[(axis + 2) % 3] + 1.0) * 0.5;
+            }
+        }
+        Kind::Rectangle | Kind::Disk | Kind::Plane => {
+            let g4 = gamma(4);
+            for l in 0..BATCH {
+                // `ray.at(t)` put on the plane (`on_plane`).
+                let x = r.o[0][l] + r.d[0][l] * t[l];
+                let z = r.o[2][l] + r.d[2][l] * t[l];
+                rec.p[0][l] = x;
+                rec.p[2][l] = z;
+                rec.err[0][l] = x.abs() * g4;
+                rec.err[1][l] = 0.0 * g4;
+                rec.err[2][l] = z.abs() * g4;
+                rec.n[1][l] = 1.0;
+                let (u, v) = match kind {
+                    Kind::Plane => (x, z),
+                    _ => ((x + 1.0) * 0.5, (z + 1.0) * 0.5),
+                };
+                rec.uv[0][l] = u;
+                rec.uv[1][l] = v;
+            }
+        }
+    }
+    rec
+}
+
+/// `rec` mapped out of object space by `(m⁻¹, m, c)`: the point and its error bound by
+/// `map_point_with_error` (`γ(3)·(|m|·|p| + |c|) + (1 + γ(3))·|m|·err`), the normal by
+/// `map_normal` (`m⁻ᵀ·n`), each sum in glam's order.
+#[inline(always)]
+fn mapped_out(rec: &mut Records, (inv, m, c): &(Mat3, Mat3, Vec3)) {
+    let g = gamma(3);
+    let cols = [m.x_axis, m.y_axis, m.z_axis];
+    let am = cols.map(|v| v.abs());
+    let rows = [inv.x_axis, inv.y_axis, inv.z_axis];
+    for l in 0..BATCH {
+        let p = [rec.p[0][l], rec.p[1][l], rec.p[2][l]];
+        let e = [rec.err[0][l], rec.err[1][l], rec.err[2][l]];
+        let n = [rec.n[0][l], rec.n[1][l], rec.n[2][l]];
+        for r in 0..3 {
+            let bound = am[0][r] * p[0].abs() + am[1][r] * p[1].abs() + am[2][r] * p[2].abs();
+            let carried = am[0][r] * e[0] + am[1][r] * e[1] + am[2][r] * e[2];
+            rec.err[r][l] = (bound + c[r].abs()) * g + carried * (1.0 + g);
+            rec.p[r][l] = cols[0][r] * p[0] + cols[1][r] * p[1] + cols[2][r] * p[2] + c[r];
+            // Row r of m⁻ᵀ is column r of m⁻¹.
+            rec.n[r][l] = rows[r].x * n[0] + rows[r].y * n[1] + rows[r].z * n[2];
+        }
+    }
+}
+
 impl Aggregate {
     /// [`Aggregate::intersect_batch`] in lanes (the module's docs), for an aggregate with
     /// `lanes` items: `out[r]` gets exactly what `intersect` gives `rays[r]`.
@@ -261,31 +435,63 @@ impl Aggregate {
         t_max: &[Real],
         out: &mut [Option<Hit>],
     ) {
-        let (best, best_t) = winners(items, rays, t_min, t_max);
-        for (r, ray) in rays.iter().enumerate() {
-            let k = best[r] as usize;
-            out[r] = match best[r] {
+        let lanes = Rays::of(rays);
+        let mut bound = [Real::INFINITY; BATCH];
+        bound[..t_max.len()].copy_from_slice(t_max);
+        let (best, best_t) = winners(items, &lanes, t_min, &bound);
+        // Each winning instance's records, for the lanes it won.
+        let mut won = Records::ZERO;
+        for (k, item) in items.iter().enumerate() {
+            if !best[..rays.len()].contains(&(k as u32)) {
+                continue;
+            }
+            let object = lanes.mapped(&item.xf);
+            let mut rec = records(item.kind, &object, t_min, &bound, &best_t);
+            if UV && item.kind == Kind::Sphere {
+                // `Shape::complete`: the sphere's uv, in object space, lane by lane.
+                for (l, &b) in best[..rays.len()].iter().enumerate() {
+                    if b == k as u32 {
+                        let p = Vec3::new(rec.p[0][l], rec.p[1][l], rec.p[2][l]);
+                        let uv = shapes::sphere::uv(p);
+                        (rec.uv[0][l], rec.uv[1][l]) = (uv.x, uv.y);
+                    }
+                }
+            }
+            if let Some(xf) = &item.xf {
+                mapped_out(&mut rec, xf);
+            }
+            for l in 0..BATCH {
+                let mine = best[l] == k as u32;
+                for c in 0..3 {
+                    won.p[c][l] = if mine { rec.p[c][l] } else { won.p[c][l] };
+                    won.err[c][l] = if mine { rec.err[c][l] } else { won.err[c][l] };
+                    won.n[c][l] = if mine { rec.n[c][l] } else { won.n[c][l] };
+                }
+                for c in 0..2 {
+                    won.uv[c][l] = if mine { rec.uv[c][l] } else { won.uv[c][l] };
+                }
+            }
+        }
+        for (l, ray) in rays.iter().enumerate() {
+            out[l] = match best[l] {
                 NONE => None,
-                // The winner's record, from its scalar test (the same distance, unless
-                // the lanes and the scalar test disagree, which the tests rule out; the
-                // scalar search then decides, as for a tie).
-                TIE => self.intersect_with::<UV>(ray, t_min, t_max[r]),
-                _ => match self.candidate(k, ray, t_min, t_max[r]) {
-                    Some(mut h) if h.t == best_t[r] => {
-                        self.finish::<UV>(k, &mut h);
-                        Some(h)
-                    }
-                    other => {
-                        debug_assert!(
-                            false,
-                            "lanes.rs: instance {k}'s lane distance {} is not its scalar \
-                             test's {:?} for {ray:?}",
-                            best_t[r],
-                            other.map(|h| h.t)
-                        );
-                        self.intersect_with::<UV>(ray, t_min, t_max[r])
-                    }
-                },
+                TIE => self.intersect_with::<UV>(ray, t_min, t_max[l]),
+                k => {
+                    let item = &items[k as usize];
+                    let n = Vec3::new(won.n[0][l], won.n[1][l], won.n[2][l]);
+                    Some(Hit {
+                        t: best_t[l],
+                        p: Vec3::new(won.p[0][l], won.p[1][l], won.p[2][l]),
+                        err: Vec3::new(won.err[0][l], won.err[1][l], won.err[2][l]),
+                        n_geo: n,
+                        n_shade: n,
+                        uv: Vec2::new(won.uv[0][l], won.uv[1][l]),
+                        material: item.material,
+                        object_id: item.object_id,
+                        surface: item.surface,
+                        prim: 0,
+                    })
+                }
             };
         }
     }

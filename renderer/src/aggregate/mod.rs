@@ -472,17 +472,18 @@ impl Aggregate {
         }
         let instances: Vec<Instance> = tagged.into_iter().map(|(_, i)| i).collect();
         let (surface_base, surfaces) = surface_offsets(&instances);
-        let lead_maps: Vec<(Real, Vec3)> = leads.iter().map(|l: &Lead| (l.s, l.c)).collect();
-        let lanes = lanes::items(&instances, &lead_maps);
-        Aggregate {
+        let mut agg = Aggregate {
             instances,
             leads,
             bvh,
             scene_order,
             surface_base,
             surfaces,
-            lanes,
-        }
+            lanes: None,
+        };
+        let lead_forms: Vec<lanes::LeadForm> = agg.leads.iter().map(|l| (l.s, l.r, l.c)).collect();
+        agg.lanes = lanes::items(&agg.instances, &lead_forms, |k| agg.surface_offset(k));
+        agg
     }
 
     /// Surfaces below this aggregate, or `None` when there are more than `u64::MAX - 1`.
@@ -544,15 +545,6 @@ impl Aggregate {
             shapes::sphere::intersect_bare(&lead.object_ray(ray), t_min, t_max)
         } else {
             self.instances[k].local_hit(ray, t_min, t_max)
-        }
-    }
-
-    /// [`Aggregate::local_hit`] for any instance `k`, bounded or not.
-    #[inline]
-    fn candidate(&self, k: usize, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
-        match k < self.bounded() {
-            true => self.local_hit(k, ray, t_min, t_max),
-            false => self.instances[k].local_hit(ray, t_min, t_max),
         }
     }
 
