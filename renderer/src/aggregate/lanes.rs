@@ -55,12 +55,12 @@ pub(super) struct Item {
 /// inverse scale `s` (0: no lead), scale `r` and centre.
 pub(super) type LeadForm = (Real, Real, Vec3);
 
-/// The lanes' form of an aggregate's instances, in `instances` order, with `leads[k]` for
+/// The lanes' form of an aggregate's instances, in `instances` order, with `lead(k)` for
 /// each bounded one and `surface(k)` its surface number; `None` when the aggregate is too
 /// large or holds a shape the lanes cannot test.
 pub(super) fn items(
     instances: &[Instance],
-    leads: &[LeadForm],
+    lead: impl Fn(usize) -> Option<LeadForm>,
     surface: impl Fn(usize) -> u64,
 ) -> Option<Vec<Item>> {
     if instances.len() > MAX_INSTANCES || instances.is_empty() {
@@ -80,8 +80,8 @@ pub(super) fn items(
             };
             // A sphere with a lead is searched and finished through it (`Lead`): the
             // diagonal matrices of its scale and inverse scale, about its centre.
-            let xf = match leads.get(k) {
-                Some(&(s, r, c)) if s != 0.0 => Some((
+            let xf = match lead(k) {
+                Some((s, r, c)) if s != 0.0 => Some((
                     Mat3::from_diagonal(Vec3::splat(s)),
                     Mat3::from_diagonal(Vec3::splat(r)),
                     c,

@@ -481,8 +481,11 @@ impl Aggregate {
             surfaces,
             lanes: None,
         };
-        let lead_forms: Vec<lanes::LeadForm> = agg.leads.iter().map(|l| (l.s, l.r, l.c)).collect();
-        agg.lanes = lanes::items(&agg.instances, &lead_forms, |k| agg.surface_offset(k));
+        agg.lanes = lanes::items(
+            &agg.instances,
+            |k| agg.leads.get(k).map(|l| (l.s, l.r, l.c)),
+            |k| agg.surface_offset(k),
+        );
         agg
     }
 
