@@ -27,13 +27,18 @@ pub(super) struct Node<const W: usize> {
     pub(super) leaves: u8,
 }
 
+/// The child of an empty lane: no node (an index past every tree's nodes).
+pub(super) const NO_NODE: u32 = u32::MAX;
+
 impl<const W: usize> Node<W> {
     /// A node with no lanes. Every lane's box is empty (low sides +∞, high sides −∞),
     /// and [`Node::set_boxes`] leaves the lanes past the children so: the slab test finds
     /// such a lane's entry at +∞ and its exit at −∞ for any ray (the near side's product
     /// is +∞ and the far side's −∞ whatever the direction's sign, ±0 included), so it
     /// never reports it, with no mask of the lanes in use (which sits on the node's last
-    /// cache line).
+    /// cache line). The exception is a ray with a NaN in its origin or direction, whose
+    /// NaN products the test ignores: it overlaps every lane, so an empty lane's child is
+    /// [`NO_NODE`], which the walk skips (bvh/traverse.rs, `Walk::step`).
     pub(super) const EMPTY: Node<W> = Node {
         b: [
             [Real::INFINITY; W],
@@ -43,7 +48,7 @@ impl<const W: usize> Node<W> {
             [Real::INFINITY; W],
             [Real::NEG_INFINITY; W],
         ],
-        child: [0; W],
+        child: [NO_NODE; W],
         count: [0; W],
         lanes: 0,
         leaves: 0,

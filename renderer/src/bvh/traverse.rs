@@ -668,8 +668,12 @@ impl Walk {
     where
         F: FnMut(u32, u8, Real) -> Visit,
     {
-        if self.count == 0 {
-            let n = &nodes[self.child as usize];
+        // An empty lane's child is no node (`Node::EMPTY`): only a ray with a NaN overlaps
+        // an empty lane (the slab test ignores a NaN product), and there the walk moves on
+        // to the next child on the stack, as from a leaf that holds nothing. (So such a
+        // ray walks the tree and hits nothing, where node 0 as the empty lanes' child made
+        // it cycle through the root until the stack overflowed.)
+        if let (0, Some(n)) = (self.count, nodes.get(self.child as usize)) {
             let (near, mask) = n.hit(self);
             if ALL && self.eager {
                 for lane in lanes_of(mask) {
@@ -727,7 +731,7 @@ impl Walk {
                 }
                 return true;
             }
-        } else {
+        } else if self.count != 0 {
             if let Visit::Hit(t) = visit(self.child, self.count, self.t_max) {
                 self.hit = true;
                 if any {
