@@ -1,5 +1,5 @@
 //! The render loop against its definition. render.rs traces a row's samples in chunks (the
-//! classic integrator's camera hits found together by `Aggregate::intersect_many`) and
+//! camera hits found together by `Aggregate::intersect_many`) and
 //! carries each pixel's sums across chunk boundaries. Here every pixel is recomputed the
 //! plain way, one sample at a time, and the image and its second moments must match bit
 //! for bit, with sample counts that split pixels across chunks.
@@ -11,6 +11,7 @@ use renderer::sampler::{PixelSampler, SamplerKind};
 use renderer::scene::Integrator;
 use renderer::scene::{Color, Scene};
 use renderer::shading::Shader;
+use renderer::Real;
 use std::path::Path;
 
 /// One pixel's samples `0..count` from sampler stream `stream`, traced the plain way: the
@@ -66,7 +67,8 @@ impl<'a> Plain<'a> {
             let c = if self.classic {
                 self.shader.trace_primary(&ray)
             } else {
-                let c = self.physical.li(&ray, &mut smp);
+                let first = scene.root.intersect_for_shading(&ray, 0.0, Real::INFINITY);
+                let c = self.physical.li(&ray, first, &mut smp);
                 dims += u64::from(smp.dimensions());
                 c
             };
