@@ -3,9 +3,11 @@
 //! rays' components, which the compiler turns into vector instructions (8 rays a
 //! register at `f32`).
 //!
-//! A scene of a few canonical primitives (a floor, a light, a sphere, a box: most of the physical
-//! catalog) pays more for the tree walk than for the tests themselves. Here every instance
-//! is tested in turn with no tree at all, and each ray keeps the smallest `t`. The tests
+//! A scene of a few canonical primitives (a floor, a light, a sphere, a box: most of the
+//! physical catalog) pays more for the tree walk than for the tests themselves. Here every
+//! instance is tested in turn with no tree at all, and each ray keeps the smallest `t`.
+//! The module reads nothing of the aggregate (whose module uses it): the aggregate hands it
+//! each instance's shape and maps as an [`Item`], and answers the tied rays itself. The tests
 //! are the scalar ones written lane by lane with the same operations in the same order
 //! (`shapes::flat`, `shapes::sphere`, `shapes::cube`, the transform's `inv_ray`, the lead's
 //! `object_ray`), so each lane computes the bits the scalar test computes; so is the
@@ -14,11 +16,11 @@
 //! that some lane's ray hits first. The scalar search keeps the first of equal
 //! distances in the order it visits, which depends on the tree; a lane whose smallest
 //! distance is shared by two instances does not know that order and takes the scalar
-//! search. So each ray gets exactly what [`Aggregate::intersect`] gives it
+//! search. So each ray gets exactly what `Aggregate::intersect` gives it
 //! (tests/bvh.rs checks it ray by ray).
 
-use super::{Aggregate, Hit, Instance, Shape};
 use crate::bvh::BATCH;
+use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{gamma, Mat3, Real, Vec2, Vec3};
 use crate::shapes;
@@ -29,7 +31,7 @@ pub(super) const MAX_INSTANCES: usize = 8;
 
 /// What lanes can test: the canonical shapes whose tests are written lane by lane.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Kind {
+pub(super) enum Kind {
     Sphere,
     Cube,
     Rectangle,
@@ -51,54 +53,24 @@ pub(super) struct Item {
     surface: u64,
 }
 
-/// What the lanes need of an aggregate's bounded instance beyond the instance: its lead's
-/// inverse scale `s` (0: no lead), scale `r` and centre.
-pub(super) type LeadForm = (Real, Real, Vec3);
-
-/// The lanes' form of an aggregate's instances, in `instances` order, with `lead(k)` for
-/// each bounded one and `surface(k)` its surface number; `None` when the aggregate is too
-/// large or holds a shape the lanes cannot test.
-pub(super) fn items(
-    instances: &[Instance],
-    lead: impl Fn(usize) -> Option<LeadForm>,
-    surface: impl Fn(usize) -> u64,
-) -> Option<Vec<Item>> {
-    if instances.len() > MAX_INSTANCES || instances.is_empty() {
-        return None;
+impl Item {
+    /// An instance of shape `kind`, placed by `xf` (`(m⁻¹, m, c)`), with the material,
+    /// object id and surface number its hits carry.
+    pub(super) fn new(
+        kind: Kind,
+        xf: Option<(Mat3, Mat3, Vec3)>,
+        material: u32,
+        object_id: u32,
+        surface: u64,
+    ) -> Item {
+        Item {
+            kind,
+            xf,
+            material,
+            object_id,
+            surface,
+        }
     }
-    instances
-        .iter()
-        .enumerate()
-        .map(|(k, inst)| {
-            let kind = match inst.shape {
-                Shape::Sphere => Kind::Sphere,
-                Shape::Cube => Kind::Cube,
-                Shape::Rectangle => Kind::Rectangle,
-                Shape::Disk => Kind::Disk,
-                Shape::Plane => Kind::Plane,
-                _ => return None,
-            };
-            // A sphere with a lead is searched and finished through it (`Lead`): the
-            // diagonal matrices of its scale and inverse scale, about its centre.
-            let xf = match lead(k) {
-                Some((s, r, c)) if s != 0.0 => Some((
-                    Mat3::from_diagonal(Vec3::splat(s)),
-                    Mat3::from_diagonal(Vec3::splat(r)),
-                    c,
-                )),
-                _ => inst
-                    .xf
-                    .map(|x| (x.inverse_matrix(), x.matrix(), x.translation())),
-            };
-            Some(Item {
-                kind,
-                xf,
-                material: inst.material,
-                object_id: inst.object_id,
-                surface: surface(k),
-            })
-        })
-        .collect()
 }
 
 /// `BATCH` values, one a lane.
@@ -424,75 +396,80 @@ fn mapped_out(rec: &mut Records, (inv, m, c): &(Mat3, Mat3, Vec3)) {
     }
 }
 
-impl Aggregate {
-    /// [`Aggregate::intersect_batch`] in lanes (the module's docs), for an aggregate with
-    /// `lanes` items: `out[r]` gets exactly what `intersect` gives `rays[r]`.
-    pub(super) fn intersect_lanes<const UV: bool>(
-        &self,
-        items: &[Item],
-        rays: &[Ray],
-        t_min: Real,
-        t_max: &[Real],
-        out: &mut [Option<Hit>],
-    ) {
-        let lanes = Rays::of(rays);
-        let mut bound = [Real::INFINITY; BATCH];
-        bound[..t_max.len()].copy_from_slice(t_max);
-        let (best, best_t) = winners(items, &lanes, t_min, &bound);
-        // Each winning instance's records, for the lanes it won.
-        let mut won = Records::ZERO;
-        for (k, item) in items.iter().enumerate() {
-            if !best[..rays.len()].contains(&(k as u32)) {
-                continue;
-            }
-            let object = lanes.mapped(&item.xf);
-            let mut rec = records(item.kind, &object, t_min, &bound, &best_t);
-            if UV && item.kind == Kind::Sphere {
-                // `Shape::complete`: the sphere's uv, in object space, lane by lane.
-                for (l, &b) in best[..rays.len()].iter().enumerate() {
-                    if b == k as u32 {
-                        let p = Vec3::new(rec.p[0][l], rec.p[1][l], rec.p[2][l]);
-                        let uv = shapes::sphere::uv(p);
-                        (rec.uv[0][l], rec.uv[1][l]) = (uv.x, uv.y);
-                    }
-                }
-            }
-            if let Some(xf) = &item.xf {
-                mapped_out(&mut rec, xf);
-            }
-            for l in 0..BATCH {
-                let mine = best[l] == k as u32;
-                for c in 0..3 {
-                    won.p[c][l] = if mine { rec.p[c][l] } else { won.p[c][l] };
-                    won.err[c][l] = if mine { rec.err[c][l] } else { won.err[c][l] };
-                    won.n[c][l] = if mine { rec.n[c][l] } else { won.n[c][l] };
-                }
-                for c in 0..2 {
-                    won.uv[c][l] = if mine { rec.uv[c][l] } else { won.uv[c][l] };
+/// The closest hits of `rays` (at most [`BATCH`]) among `items`, each with its own
+/// `t_max`, into `out` (`out[r]` for `rays[r]`), as `Aggregate::intersect` finds them
+/// (with the sphere's uv when `UV`); returns the mask of the rays whose closest distance
+/// two instances share, which the caller's scalar search answers (`out` is left alone
+/// there).
+pub(super) fn intersect<const UV: bool>(
+    items: &[Item],
+    rays: &[Ray],
+    t_min: Real,
+    t_max: &[Real],
+    out: &mut [Option<Hit>],
+) -> u64 {
+    let lanes = Rays::of(rays);
+    let mut bound = [Real::INFINITY; BATCH];
+    bound[..t_max.len()].copy_from_slice(t_max);
+    let (best, best_t) = winners(items, &lanes, t_min, &bound);
+    // Each winning instance's records, for the lanes it won.
+    let mut won = Records::ZERO;
+    for (k, item) in items.iter().enumerate() {
+        if !best[..rays.len()].contains(&(k as u32)) {
+            continue;
+        }
+        let object = lanes.mapped(&item.xf);
+        let mut rec = records(item.kind, &object, t_min, &bound, &best_t);
+        if UV && item.kind == Kind::Sphere {
+            // `Shape::complete`: the sphere's uv, in object space, lane by lane.
+            for (l, &b) in best[..rays.len()].iter().enumerate() {
+                if b == k as u32 {
+                    let p = Vec3::new(rec.p[0][l], rec.p[1][l], rec.p[2][l]);
+                    let uv = shapes::sphere::uv(p);
+                    (rec.uv[0][l], rec.uv[1][l]) = (uv.x, uv.y);
                 }
             }
         }
-        for (l, ray) in rays.iter().enumerate() {
-            out[l] = match best[l] {
-                NONE => None,
-                TIE => self.intersect_with::<UV>(ray, t_min, t_max[l]),
-                k => {
-                    let item = &items[k as usize];
-                    let n = Vec3::new(won.n[0][l], won.n[1][l], won.n[2][l]);
-                    Some(Hit {
-                        t: best_t[l],
-                        p: Vec3::new(won.p[0][l], won.p[1][l], won.p[2][l]),
-                        err: Vec3::new(won.err[0][l], won.err[1][l], won.err[2][l]),
-                        n_geo: n,
-                        n_shade: n,
-                        uv: Vec2::new(won.uv[0][l], won.uv[1][l]),
-                        material: item.material,
-                        object_id: item.object_id,
-                        surface: item.surface,
-                        prim: 0,
-                    })
-                }
-            };
+        if let Some(xf) = &item.xf {
+            mapped_out(&mut rec, xf);
+        }
+        for l in 0..BATCH {
+            let mine = best[l] == k as u32;
+            for c in 0..3 {
+                won.p[c][l] = if mine { rec.p[c][l] } else { won.p[c][l] };
+                won.err[c][l] = if mine { rec.err[c][l] } else { won.err[c][l] };
+                won.n[c][l] = if mine { rec.n[c][l] } else { won.n[c][l] };
+            }
+            for c in 0..2 {
+                won.uv[c][l] = if mine { rec.uv[c][l] } else { won.uv[c][l] };
+            }
         }
     }
+    let mut ties = 0u64;
+    for (l, o) in out[..rays.len()].iter_mut().enumerate() {
+        *o = match best[l] {
+            NONE => None,
+            TIE => {
+                ties |= 1 << l;
+                continue;
+            }
+            k => {
+                let item = &items[k as usize];
+                let n = Vec3::new(won.n[0][l], won.n[1][l], won.n[2][l]);
+                Some(Hit {
+                    t: best_t[l],
+                    p: Vec3::new(won.p[0][l], won.p[1][l], won.p[2][l]),
+                    err: Vec3::new(won.err[0][l], won.err[1][l], won.err[2][l]),
+                    n_geo: n,
+                    n_shade: n,
+                    uv: Vec2::new(won.uv[0][l], won.uv[1][l]),
+                    material: item.material,
+                    object_id: item.object_id,
+                    surface: item.surface,
+                    prim: 0,
+                })
+            }
+        };
+    }
+    ties
 }

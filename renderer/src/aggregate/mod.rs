@@ -481,12 +481,49 @@ impl Aggregate {
             surfaces,
             lanes: None,
         };
-        agg.lanes = lanes::items(
-            &agg.instances,
-            |k| agg.leads.get(k).map(|l| (l.s, l.r, l.c)),
-            |k| agg.surface_offset(k),
-        );
+        agg.lanes = agg.lane_items();
         agg
+    }
+
+    /// The instances as the lanes test them (lanes.rs), when there are at most
+    /// [`lanes::MAX_INSTANCES`] and each is a sphere, cube, rectangle, disk or plane: its
+    /// shape, the map of its lead (a sphere's uniform scale and inverse about its centre)
+    /// or of its transform, and what its hits carry.
+    fn lane_items(&self) -> Option<Vec<lanes::Item>> {
+        if self.instances.is_empty() || self.instances.len() > lanes::MAX_INSTANCES {
+            return None;
+        }
+        let kinds = self.instances.iter().map(|inst| match inst.shape {
+            Shape::Sphere => Some(lanes::Kind::Sphere),
+            Shape::Cube => Some(lanes::Kind::Cube),
+            Shape::Rectangle => Some(lanes::Kind::Rectangle),
+            Shape::Disk => Some(lanes::Kind::Disk),
+            Shape::Plane => Some(lanes::Kind::Plane),
+            _ => None,
+        });
+        kinds
+            .zip(&self.instances)
+            .enumerate()
+            .map(|(k, (kind, inst))| {
+                let xf = match self.leads.get(k) {
+                    Some(l) if l.s != 0.0 => Some((
+                        Mat3::from_diagonal(Vec3::splat(l.s)),
+                        Mat3::from_diagonal(Vec3::splat(l.r)),
+                        l.c,
+                    )),
+                    _ => inst
+                        .xf
+                        .map(|x| (x.inverse_matrix(), x.matrix(), x.translation())),
+                };
+                Some(lanes::Item::new(
+                    kind?,
+                    xf,
+                    inst.material,
+                    inst.object_id,
+                    self.surface_offset(k),
+                ))
+            })
+            .collect()
     }
 
     /// Surfaces below this aggregate, or `None` when there are more than `u64::MAX - 1`.
@@ -679,7 +716,12 @@ impl Aggregate {
         out: &mut [Option<Hit>],
     ) {
         if let Some(items) = &self.lanes {
-            self.intersect_lanes::<UV>(items, rays, t_min, t_max, out);
+            // In lanes (lanes.rs); a ray whose closest distance two instances share takes
+            // the scalar search, which keeps the first in the tree's order.
+            let ties = lanes::intersect::<UV>(items, rays, t_min, t_max, out);
+            for r in (0..rays.len()).filter(|r| ties >> r & 1 == 1) {
+                out[r] = self.intersect_with::<UV>(&rays[r], t_min, t_max[r]);
+            }
             return;
         }
         if self.bounded() == 1 && self.leads[0].s == 0.0 {
