@@ -184,8 +184,7 @@ pub(crate) fn scores(w: usize, h: usize, r: usize, variance: &[f64], cost: &[f64
 /// A number in [0, 1) from the pixel's index alone, for rounding its count: a hash of its
 /// own (not any sampler's numbers, which would be the pixel's own samples).
 fn round_up_chance(p: usize) -> f64 {
-    let h = crate::sampler::mix64(p as u64 ^ 0xada7_c0de_5eed_0001);
-    (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    crate::sampler::to_unit(crate::sampler::mix64(p as u64 ^ 0xada7_c0de_5eed_0001))
 }
 
 /// Sums of the scores outside each pixel's block of radius `r`, each added up from the scores

@@ -62,8 +62,9 @@ fn hash_mixed(first: u64, b: u64, c: u64) -> u64 {
     mix64(mix64(first.wrapping_add(b)).wrapping_add(c))
 }
 
+/// The top 53 bits of `h` as a number in [0, 1).
 #[inline]
-fn to_unit(h: u64) -> f64 {
+pub(crate) fn to_unit(h: u64) -> f64 {
     (h >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
 }
 
