@@ -75,8 +75,6 @@ impl Item {
 
 /// `BATCH` values, one a lane.
 type L = [Real; BATCH];
-/// The same in `f64` (the sphere's test computes its discriminant in `f64`).
-type D = [f64; BATCH];
 
 /// Rays as lanes: each component an array.
 struct Rays {
@@ -130,6 +128,61 @@ impl Rays {
     }
 }
 
+/// The lanes' rays against the unit sphere as `shapes::sphere`'s `solve` computes them in
+/// `f64`, lane by lane: the squared length of the direction `a`, `b = o·d`, the line's
+/// point `l` nearest the centre, the direction `d`, and the discriminant.
+struct SphereLines {
+    a: [f64; BATCH],
+    b: [f64; BATCH],
+    l: [[f64; BATCH]; 3],
+    d: [[f64; BATCH]; 3],
+    disc: [f64; BATCH],
+}
+
+impl SphereLines {
+    #[inline(always)]
+    fn of(r: &Rays) -> SphereLines {
+        let mut s = SphereLines {
+            a: [0.0; BATCH],
+            b: [0.0; BATCH],
+            l: [[0.0; BATCH]; 3],
+            d: [[0.0; BATCH]; 3],
+            disc: [0.0; BATCH],
+        };
+        for l in 0..BATCH {
+            let (ox, oy, oz) = (r.o[0][l] as f64, r.o[1][l] as f64, r.o[2][l] as f64);
+            let (dx, dy, dz) = (r.d[0][l] as f64, r.d[1][l] as f64, r.d[2][l] as f64);
+            let a = dx * dx + dy * dy + dz * dz;
+            let b = ox * dx + oy * dy + oz * dz;
+            let k = b / a;
+            let (lx, ly, lz) = (ox - dx * k, oy - dy * k, oz - dz * k);
+            s.disc[l] = a * (1.0 - (lx * lx + ly * ly + lz * lz));
+            (s.a[l], s.b[l]) = (a, b);
+            (s.l[0][l], s.l[1][l], s.l[2][l]) = (lx, ly, lz);
+            (s.d[0][l], s.d[1][l], s.d[2][l]) = (dx, dy, dz);
+        }
+        s
+    }
+
+    /// Lane `l`'s two roots in `Real`, ascending, as `stable_roots` finds them.
+    #[inline(always)]
+    fn roots(&self, r: &Rays, l: usize) -> (Real, Real) {
+        let disc = self.disc[l] as Real;
+        let (a, b) = (self.a[l] as Real, self.b[l] as Real);
+        let (ox, oy, oz) = (r.o[0][l], r.o[1][l], r.o[2][l]);
+        let c = ox * ox + oy * oy + oz * oz - 1.0;
+        let s = disc.sqrt();
+        let q = -(b + s.copysign(b));
+        let (r0, r1) = (q / a, c / q);
+        let (t0, t1) = if r0 <= r1 { (r0, r1) } else { (r1, r0) };
+        if q == 0.0 {
+            (0.0, 0.0)
+        } else {
+            (t0, t1)
+        }
+    }
+}
+
 /// The distance of an item's candidate for each lane (`shapes::flat`, `shapes::sphere`'s
 /// `solve`), or infinity where it has none in `(t_min, t_max)`.
 #[inline(always)]
@@ -138,31 +191,10 @@ fn distances(kind: Kind, r: &Rays, t_min: Real, t_max: &L) -> L {
     match kind {
         Kind::Sphere => {
             // In f64 up to the discriminant, then in `Real`, as `solve`.
-            let mut disc64: D = [0.0; BATCH];
-            let mut a64: D = [0.0; BATCH];
-            let mut b64: D = [0.0; BATCH];
+            let line = SphereLines::of(r);
             for l in 0..BATCH {
-                let (ox, oy, oz) = (r.o[0][l] as f64, r.o[1][l] as f64, r.o[2][l] as f64);
-                let (dx, dy, dz) = (r.d[0][l] as f64, r.d[1][l] as f64, r.d[2][l] as f64);
-                let a = dx * dx + dy * dy + dz * dz;
-                let b = ox * dx + oy * dy + oz * dz;
-                let k = b / a;
-                let (lx, ly, lz) = (ox - dx * k, oy - dy * k, oz - dz * k);
-                disc64[l] = a * (1.0 - (lx * lx + ly * ly + lz * lz));
-                a64[l] = a;
-                b64[l] = b;
-            }
-            for l in 0..BATCH {
-                let disc = disc64[l] as Real;
-                let (a, b) = (a64[l] as Real, b64[l] as Real);
-                let (ox, oy, oz) = (r.o[0][l], r.o[1][l], r.o[2][l]);
-                let c = ox * ox + oy * oy + oz * oz - 1.0;
-                // `stable_roots`.
-                let s = disc.sqrt();
-                let q = -(b + s.copysign(b));
-                let (r0, r1) = (q / a, c / q);
-                let (t0, t1) = if r0 <= r1 { (r0, r1) } else { (r1, r0) };
-                let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (t0, t1) };
+                let disc = line.disc[l] as Real;
+                let (t0, t1) = line.roots(r, l);
                 // (`&` and `|` rather than `&&` and `||` here and below: the same
                 // values, without the branches that would keep the loop scalar.)
                 let in0 = (t0 > t_min) & (t0 < t_max[l]);
@@ -276,24 +308,13 @@ fn records(kind: Kind, r: &Rays, t_min: Real, t_max: &L, t: &L) -> Records {
     match kind {
         Kind::Sphere => {
             let g5 = gamma(5);
+            let line = SphereLines::of(r);
             for l in 0..BATCH {
                 // `solve` again, to learn which root the lane took, then `intersect_bare`.
-                let (ox, oy, oz) = (r.o[0][l] as f64, r.o[1][l] as f64, r.o[2][l] as f64);
-                let (dx, dy, dz) = (r.d[0][l] as f64, r.d[1][l] as f64, r.d[2][l] as f64);
-                let a64 = dx * dx + dy * dy + dz * dz;
-                let b64 = ox * dx + oy * dy + oz * dz;
-                let k = b64 / a64;
-                let (lx, ly, lz) = (ox - dx * k, oy - dy * k, oz - dz * k);
-                let disc64 = a64 * (1.0 - (lx * lx + ly * ly + lz * lz));
-                let disc = disc64 as Real;
-                let (a, b) = (a64 as Real, b64 as Real);
-                let (rox, roy, roz) = (r.o[0][l], r.o[1][l], r.o[2][l]);
-                let c = rox * rox + roy * roy + roz * roz - 1.0;
-                let sq = disc.sqrt();
-                let q = -(b + sq.copysign(b));
-                let (r0, r1) = (q / a, c / q);
-                let t0 = if r0 <= r1 { r0 } else { r1 };
-                let t0 = if q == 0.0 { 0.0 } else { t0 };
+                let (t0, _) = line.roots(r, l);
+                let [lx, ly, lz] = [0, 1, 2].map(|c| line.l[c][l]);
+                let [dx, dy, dz] = [0, 1, 2].map(|c| line.d[c][l]);
+                let (a64, disc64) = (line.a[l], line.disc[l]);
                 let first = (t0 > t_min) & (t0 < t_max[l]);
                 let side: f64 = if first { -1.0 } else { 1.0 };
                 let f = side * disc64.sqrt() / a64;
