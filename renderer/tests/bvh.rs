@@ -581,8 +581,9 @@ fn compact_spheres_match_the_general_path_bit_for_bit() {
     }
 }
 
-/// The bits of a hit, every field.
-type HitBits = (u64, [[u64; 3]; 4], [u64; 2], u32, u32);
+/// The bits of a hit, every field but the primitive (which the scalar triangle tests the
+/// mesh is compared with do not set).
+type HitBits = (u64, [[u64; 3]; 4], [u64; 2], u32, u32, u64);
 
 fn hit_bits(h: &Option<Hit>) -> Option<HitBits> {
     h.map(|h| {
@@ -593,6 +594,7 @@ fn hit_bits(h: &Option<Hit>) -> Option<HitBits> {
             h.uv.to_array().map(|x| x.to_bits() as u64),
             h.material,
             h.object_id,
+            h.surface,
         )
     })
 }
@@ -1404,4 +1406,46 @@ fn rays_with_a_nan_do_not_panic() {
             }
         }
     }
+}
+
+/// Where the tree's box test and an instance's own test disagree, the lanes give what
+/// testing every instance gives (aggregate/lanes.rs): an unplaced rectangle and a sphere
+/// away from it, and a ray down onto the rectangle's edge x = 1, nearly parallel to the
+/// edge's box face: the rectangle's test puts the hit at x = 1 + ε/4, which rounds to 1,
+/// on the rectangle, where the box test's slab in x ends at t = 0, before the slab in y
+/// begins. The scalar search's answer there is the tree's (it may be none).
+#[test]
+fn lanes_are_the_brute_force_search_at_a_box_edge() {
+    let sphere = Transform::new(&Affine64 {
+        m: DMat3::IDENTITY,
+        d: DVec3::new(-5.0, 0.0, 0.0),
+    })
+    .unwrap();
+    let agg = Aggregate::new(vec![
+        Instance {
+            shape: Shape::Rectangle,
+            xf: None,
+            material: 0,
+            object_id: 1,
+        },
+        Instance {
+            shape: Shape::Sphere,
+            xf: Some(sphere),
+            material: 0,
+            object_id: 2,
+        },
+    ]);
+    assert!(agg.searches_in_lanes());
+    // A quarter of an ulp of 1 in either build: 1 + it rounds to 1.
+    let tiny = Real::EPSILON * 0.25;
+    let ray = Ray::new(Vec3::new(1.0, 1.0, 0.0), Vec3::new(tiny, -1.0, 0.0));
+    let mut out = [None];
+    agg.intersect_many(&[ray], 0.0, INF, &mut out);
+    let brute = agg.intersect_brute_force(&ray, 0.0, INF);
+    assert!(brute.is_some(), "the rectangle's own test accepts the ray");
+    assert_eq!(
+        hit_bits(&out[0]),
+        hit_bits(&brute),
+        "aggregate/lanes.rs: the lanes' hit is not the brute-force search's"
+    );
 }

@@ -16,8 +16,14 @@
 //! that some lane's ray hits first. The scalar search keeps the first of equal
 //! distances in the order it visits, which depends on the tree; a lane whose smallest
 //! distance is shared by two instances does not know that order and takes the scalar
-//! search. So each ray gets exactly what `Aggregate::intersect` gives it
-//! (tests/bvh.rs checks it ray by ray).
+//! search. So each ray gets what testing every instance in turn gives it
+//! (`Aggregate::intersect_brute_force`, the reference the tree is tested against), which
+//! is `Aggregate::intersect`'s hit on every ray of the tests (tests/bvh.rs, ray by ray) and
+//! of every catalog scene (`scripts/same-bits.sh`). The two can differ where the tree's
+//! box test, which the lanes do not make, rejects a ray that an instance's own test
+//! accepts: a ray nearly parallel to a rectangle's plane through its edge, within half a
+//! unit in the last place (`lanes_are_the_brute_force_search_at_a_box_edge`). There the
+//! lanes give the brute-force answer.
 
 use crate::bvh::BATCH;
 use crate::hit::Hit;

@@ -677,7 +677,7 @@ impl Aggregate {
     /// [`Bvh::traverse_batch`], so that one ray's cache misses overlap the others' work;
     /// a smaller tree stays in cache and is cheaper one ray at a time. Only this tree's
     /// walk is interleaved: the BVHs of meshes and nested groups below it are walked one
-    /// ray at a time. The classic integrator's camera rays and the AOVs go through here.
+    /// ray at a time. Both models' camera rays and the AOVs go through here.
     pub fn intersect_many(&self, rays: &[Ray], t_min: Real, t_max: Real, out: &mut [Option<Hit>]) {
         self.intersect_many_with::<true>(rays, t_min, t_max, out)
     }
@@ -786,7 +786,7 @@ impl Aggregate {
     }
 
     /// Whether [`Aggregate::intersect_many`] tests this aggregate's instances in lanes
-    /// (lanes.rs): a few canonical spheres, rectangles, disks and planes.
+    /// (lanes.rs): a few canonical spheres, cubes, rectangles, disks and planes.
     pub fn searches_in_lanes(&self) -> bool {
         self.lanes.is_some()
     }

@@ -37,8 +37,9 @@ impl<const W: usize> Node<W> {
     /// is +∞ and the far side's −∞ whatever the direction's sign, ±0 included), so it
     /// never reports it, with no mask of the lanes in use (which sits on the node's last
     /// cache line). The exception is a ray with a NaN in its origin or direction, whose
-    /// NaN products the test ignores: it overlaps every lane, so an empty lane's child is
-    /// [`NO_NODE`], which the walk skips (bvh/traverse.rs, `Walk::step`).
+    /// NaN products the test ignores: on such an axis nothing bounds it, and it may
+    /// overlap an empty lane, so an empty lane's child is [`NO_NODE`], which the walk
+    /// skips (bvh/traverse.rs, `Walk::step`).
     pub(super) const EMPTY: Node<W> = Node {
         b: [
             [Real::INFINITY; W],

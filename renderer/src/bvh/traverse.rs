@@ -628,11 +628,6 @@ impl Walk {
 
     /// A walk of `ray` over `(t_min, t_max)`; `eager` as [`Walk::eager`] starts: true for
     /// a search for the closest hit, false for any hit.
-    ///
-    /// A ray with a NaN in its origin or direction overlaps nothing: the slab test ignores
-    /// a NaN product (`Node::hit`), so such a ray would overlap every lane, the empty ones
-    /// too, and overflow the stack. Its interval's end is made NaN instead, which no
-    /// entry distance is below.
     #[inline]
     pub(super) fn new(ray: &Ray, t_min: Real, t_max: Real, eager: bool) -> Self {
         let inv = Vec3::ONE / ray.d;
@@ -668,11 +663,12 @@ impl Walk {
     where
         F: FnMut(u32, u8, Real) -> Visit,
     {
-        // An empty lane's child is no node (`Node::EMPTY`): only a ray with a NaN overlaps
-        // an empty lane (the slab test ignores a NaN product), and there the walk moves on
-        // to the next child on the stack, as from a leaf that holds nothing. (So such a
-        // ray walks the tree and hits nothing, where node 0 as the empty lanes' child made
-        // it cycle through the root until the stack overflowed.)
+        // An empty lane's child is no node (`Node::EMPTY`): only a ray with a NaN can
+        // overlap an empty lane (the slab test ignores a NaN product), and there the walk
+        // moves on to the next child on the stack, as from a leaf that holds nothing. (So
+        // such a ray walks the tree and finds what the shapes' own tests report, where node
+        // 0 as the empty lanes' child made it cycle through the root until the stack
+        // overflowed.)
         if let (0, Some(n)) = (self.count, nodes.get(self.child as usize)) {
             let (near, mask) = n.hit(self);
             if ALL && self.eager {
