@@ -420,7 +420,6 @@ impl<'a> PhysicalIntegrator<'a> {
         let mut l = glam::DVec3::ZERO;
         let mut beta = glam::DVec3::ONE;
         let mut ray = *ray;
-        let mut t_min: Real = 0.0;
         let mut prev_pdf = 0.0; // 0: the previous vertex was the camera or a delta lobe.
         let mut eta_scale = 1.0;
         let mut depth = 0u32;
@@ -429,17 +428,10 @@ impl<'a> PhysicalIntegrator<'a> {
         let mut caustic = false;
         // The shading normal of the previous vertex, when it had a density (env_pdf).
         let mut prev_n = glam::DVec3::ZERO;
-        // The camera ray's hit is given; the loop finds the others.
-        let mut given = Some(first);
+        // The camera ray's hit is given; each vertex finds the next one's.
+        let mut found = first;
         loop {
             let dir = dv(ray.d).normalize();
-            let found = match given.take() {
-                Some(first) => first,
-                None => self
-                    .scene
-                    .root
-                    .intersect_for_shading(&ray, t_min, Real::INFINITY),
-            };
             let Some(hit) = found else {
                 if let Some(env) = self.env {
                     let w = if prev_pdf > 0.0 {
@@ -529,9 +521,12 @@ impl<'a> PhysicalIntegrator<'a> {
             if beta == glam::DVec3::ZERO {
                 break;
             }
-            let (r, tm) = self.spawn.ray(s.p, s.err, rv(s.ng), rv(bs.dir));
-            ray = r;
-            t_min = tm;
+            let t_min;
+            (ray, t_min) = self.spawn.ray(s.p, s.err, rv(s.ng), rv(bs.dir));
+            found = self
+                .scene
+                .root
+                .intersect_for_shading(&ray, t_min, Real::INFINITY);
         }
         l
     }
