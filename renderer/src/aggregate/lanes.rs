@@ -89,12 +89,14 @@ struct Rays {
 }
 
 impl Rays {
+    const ZERO: Rays = Rays {
+        o: [[0.0; BATCH]; 3],
+        d: [[0.0; BATCH]; 3],
+    };
+
     /// `rays` (at most `BATCH`) as lanes; the lanes past the last ray repeat it.
     fn of(rays: &[Ray]) -> Rays {
-        let mut r = Rays {
-            o: [[0.0; BATCH]; 3],
-            d: [[0.0; BATCH]; 3],
-        };
+        let mut r = Rays::ZERO;
         let last = rays[rays.len() - 1];
         for l in 0..BATCH {
             let ray = rays.get(l).unwrap_or(&last);
@@ -118,10 +120,7 @@ impl Rays {
             };
         };
         let cols = [m.x_axis, m.y_axis, m.z_axis];
-        let mut out = Rays {
-            o: [[0.0; BATCH]; 3],
-            d: [[0.0; BATCH]; 3],
-        };
+        let mut out = Rays::ZERO;
         for l in 0..BATCH {
             let p = [self.o[0][l] - c.x, self.o[1][l] - c.y, self.o[2][l] - c.z];
             let v = [self.d[0][l], self.d[1][l], self.d[2][l]];
@@ -189,6 +188,31 @@ impl SphereLines {
     }
 }
 
+/// `shapes::cube`'s `crossing` for lane `l`: the entry and exit distances over the slabs
+/// of the axes the ray is not parallel to, the axes they come from, and whether the ray
+/// is parallel to an axis and outside its slab (a miss).
+#[inline(always)]
+fn cube_crossing(r: &Rays, l: usize) -> (Real, Real, [usize; 2], bool) {
+    let (mut near, mut far) = (Real::NEG_INFINITY, Real::INFINITY);
+    let (mut near_axis, mut far_axis) = (0usize, 0usize);
+    let mut outside = false;
+    for k in 0..3 {
+        let (o, d) = (r.o[k][l], r.d[k][l]);
+        let parallel = d == 0.0;
+        outside |= parallel & !((-1.0 <= o) & (o <= 1.0));
+        let inv = 1.0 / d;
+        let (a, b) = ((-1.0 - o) * inv, (1.0 - o) * inv);
+        let (a, b) = if a > b { (b, a) } else { (a, b) };
+        let nearer = !parallel & (a > near);
+        let farther = !parallel & (b < far);
+        near = if nearer { a } else { near };
+        near_axis = if nearer { k } else { near_axis };
+        far = if farther { b } else { far };
+        far_axis = if farther { k } else { far_axis };
+    }
+    (near, far, [near_axis, far_axis], outside)
+}
+
 /// The distance of an item's candidate for each lane (`shapes::flat`, `shapes::sphere`'s
 /// `solve`), or infinity where it has none in `(t_min, t_max)`.
 #[inline(always)]
@@ -215,20 +239,7 @@ fn distances(kind: Kind, r: &Rays, t_min: Real, t_max: &L) -> L {
         }
         Kind::Cube => {
             for l in 0..BATCH {
-                // `shapes::cube`'s `crossing`: the slabs of the axes the ray is not
-                // parallel to; one it is parallel to and outside of misses.
-                let (mut near, mut far) = (Real::NEG_INFINITY, Real::INFINITY);
-                let mut outside = false;
-                for k in 0..3 {
-                    let (o, d) = (r.o[k][l], r.d[k][l]);
-                    let parallel = d == 0.0;
-                    outside |= parallel & !((-1.0 <= o) & (o <= 1.0));
-                    let inv = 1.0 / d;
-                    let (a, b) = ((-1.0 - o) * inv, (1.0 - o) * inv);
-                    let (a, b) = if a > b { (b, a) } else { (a, b) };
-                    near = if !parallel & (a > near) { a } else { near };
-                    far = if !parallel & (b < far) { b } else { far };
-                }
+                let (near, far, _, outside) = cube_crossing(r, l);
                 let in_near = (near > t_min) & (near < t_max[l]);
                 let in_far = (far > t_min) & (far < t_max[l]);
                 let first = if in_near { near } else { far };
@@ -344,21 +355,7 @@ fn records(kind: Kind, r: &Rays, t_min: Real, t_max: &L, t: &L) -> Records {
             let g4 = gamma(4);
             for l in 0..BATCH {
                 // `crossing` again, for the axis and side of the face, then `intersect`.
-                let (mut near, mut far) = (Real::NEG_INFINITY, Real::INFINITY);
-                let (mut near_axis, mut far_axis) = (0usize, 0usize);
-                for k in 0..3 {
-                    let (o, d) = (r.o[k][l], r.d[k][l]);
-                    let parallel = d == 0.0;
-                    let inv = 1.0 / d;
-                    let (a, b) = ((-1.0 - o) * inv, (1.0 - o) * inv);
-                    let (a, b) = if a > b { (b, a) } else { (a, b) };
-                    let nearer = !parallel & (a > near);
-                    let farther = !parallel & (b < far);
-                    near = if nearer { a } else { near };
-                    near_axis = if nearer { k } else { near_axis };
-                    far = if farther { b } else { far };
-                    far_axis = if farther { k } else { far_axis };
-                }
+                let (near, _, [near_axis, far_axis], _) = cube_crossing(r, l);
                 let entering = (near > t_min) & (near < t_max[l]);
                 let axis = if entering { near_axis } else { far_axis };
                 let da = [r.d[0][l], r.d[1][l], r.d[2][l]][axis];
