@@ -1267,9 +1267,9 @@ fn meshes_give_their_triangles_back_in_the_given_order() {
     );
 }
 
-/// A small scene of spheres, cubes, rectangles, disks and planes is searched in lanes by
-/// `intersect_many` (aggregate/lanes.rs): every ray must get exactly the hit `intersect`
-/// gives it alone, on scenes with general affine instances, unplaced ones, spheres placed
+/// A small scene of spheres, cubes, cylinders (capped or open), rectangles, disks and
+/// planes is searched in lanes by `intersect_many` (aggregate/lanes.rs): every ray must
+/// get exactly the hit `intersect` gives it alone, on scenes with general affine instances, unplaced ones, spheres placed
 /// by a scale and a translation (the aggregate's leads), planes beside the tree, and
 /// copies of one instance, where every hit is a tie that the scalar search decides.
 #[test]
@@ -1285,10 +1285,12 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
                 let shape = [
                     Shape::Sphere,
                     Shape::Cube,
+                    Shape::Cylinder { capped: true },
+                    Shape::Cylinder { capped: false },
                     Shape::Rectangle,
                     Shape::Disk,
                     Shape::Plane,
-                ][rng.below(5)]
+                ][rng.below(7)]
                 .clone();
                 let xf = match rng.below(10) {
                     0 => None,
@@ -1331,6 +1333,21 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
                 for o in [Vec3::X, Vec3::NEG_Y, Vec3::new(0.25, 0.0, -0.5), Vec3::ONE] {
                     rays.push(Ray::new(o, vec3(rng.unit())));
                 }
+                // From the unplaced cylinder's cap, rim and side, and along its axis
+                // (no side roots: a cap counts when the ray runs inside the radius).
+                for o in [
+                    Vec3::new(0.25, 1.0, -0.5),
+                    Vec3::new(0.0, -1.0, 1.0),
+                    Vec3::Z,
+                ] {
+                    rays.push(Ray::new(o, vec3(rng.unit())));
+                }
+                for (x, dy) in [(0.5, 1.0), (0.5, -1.0), (1.0, 1.0), (1.5, -1.0)] {
+                    rays.push(Ray::new(
+                        Vec3::new(x, 3.0 * dy, 0.0),
+                        Vec3::new(0.0, -dy, 0.0),
+                    ));
+                }
             }
             let mut out = vec![None; rays.len()];
             agg.intersect_many_for_shading(&rays, t_min, t_max, &mut out);
@@ -1361,6 +1378,90 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
         "only {scenes_in_lanes} of 300 scenes in lanes"
     );
     assert!(hits > 1500, "only {hits} rays hit");
+}
+
+/// The cylinder's edge cases in lanes (aggregate/lanes.rs `CylinderLane`), each exactly
+/// as `intersect` decides it: rays along the axis (no side roots: a cap counts when the
+/// ray runs inside the radius, on it included), rays parallel to the caps (the slab is
+/// everything or nothing), rays through a rim (a side root equal to the slab's end), and
+/// rays from a point on the cap, the rim and the side, on the unplaced cylinder, capped
+/// and open.
+#[test]
+fn cylinder_edges_in_lanes_match_one_at_a_time() {
+    let v = Vec3::new;
+    let mut rays = Vec::new();
+    for x in [0.0, 0.5, 1.0, 1.5] {
+        for dy in [1.0, -1.0] {
+            rays.push(Ray::new(v(x, 3.0 * dy, 0.0), v(0.0, -dy, 0.0)));
+            rays.push(Ray::new(v(0.0, 0.5 * dy, x), v(0.0, -dy, 0.0)));
+        }
+    }
+    for y in [-1.0, 0.5, 1.0, 1.5] {
+        rays.push(Ray::new(v(3.0, y, 0.0), v(-1.0, 0.0, 0.0)));
+        rays.push(Ray::new(v(0.0, y, 0.0), v(0.0, 0.0, 1.0)));
+    }
+    for (sx, sy) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+        // Through the rim at (sx, sy, 0): the side root and the slab's end are both 2.
+        rays.push(Ray::new(v(3.0 * sx, 3.0 * sy, 0.0), v(-sx, -sy, 0.0)));
+        // From the axis out through the rim: both 1.
+        rays.push(Ray::new(Vec3::ZERO, v(sx, sy, 0.0)));
+    }
+    // Aimed at points of the rims from anywhere: the side's point lands on either side
+    // of y = ±1 in rounding, which the clamp to the slab takes back.
+    let mut rng = SplitMix(7);
+    for _ in 0..4096 {
+        let turn = rng.range(0.0, std::f64::consts::TAU);
+        let y = if rng.chance(0.5) { 1.0 } else { -1.0 };
+        let o = rng.vec(-4.0, 4.0);
+        rays.push(Ray::new(
+            vec3(o),
+            vec3(DVec3::new(turn.cos(), y, turn.sin()) - o),
+        ));
+    }
+    for o in [v(0.25, 1.0, -0.5), v(0.0, -1.0, 1.0), Vec3::Z] {
+        for d in [
+            v(0.0, -1.0, 0.0),
+            v(0.0, 1.0, 0.0),
+            v(-1.0, 0.0, 0.0),
+            v(1.0, 0.0, 0.0),
+            v(-0.6, -0.8, 0.0),
+        ] {
+            rays.push(Ray::new(o, d));
+        }
+    }
+    for capped in [true, false] {
+        let agg = Aggregate::new(vec![Instance {
+            shape: Shape::Cylinder { capped },
+            xf: None,
+            material: 0,
+            object_id: 1,
+        }]);
+        assert!(
+            agg.searches_in_lanes(),
+            "the cylinder alone is not searched in lanes"
+        );
+        let mut hits = 0;
+        for chunk in rays.chunks(16) {
+            let mut out = vec![None; chunk.len()];
+            agg.intersect_many(chunk, 0.0, Real::INFINITY, &mut out);
+            for (r, got) in chunk.iter().zip(&out) {
+                let alone = agg.intersect(r, 0.0, Real::INFINITY);
+                assert_eq!(
+                    hit_bits(got),
+                    hit_bits(&alone),
+                    "cylinder (capped: {capped}), {r:?}: the lanes' cylinder \
+                     (renderer/src/aggregate/lanes.rs CylinderLane) differs from \
+                     shapes/cylinder.rs"
+                );
+                hits += alone.is_some() as usize;
+            }
+        }
+        assert!(
+            hits > rays.len() / 3,
+            "only {hits} of {} rays hit",
+            rays.len()
+        );
+    }
 }
 
 /// A ray with a NaN in its origin or its direction does not panic any search, on trees

@@ -486,9 +486,9 @@ impl Aggregate {
     }
 
     /// The instances as the lanes test them (lanes.rs), when there are at most
-    /// [`lanes::MAX_INSTANCES`] and each is a sphere, cube, rectangle, disk or plane: its
-    /// shape, the map of its lead (a sphere's uniform scale and inverse about its centre)
-    /// or of its transform, and what its hits carry.
+    /// [`lanes::MAX_INSTANCES`] and each is a sphere, cube, cylinder, rectangle, disk or
+    /// plane: its shape, the map of its lead (a sphere's uniform scale and inverse about
+    /// its centre) or of its transform, and what its hits carry.
     fn lane_items(&self) -> Option<Vec<lanes::Item>> {
         if self.instances.is_empty() || self.instances.len() > lanes::MAX_INSTANCES {
             return None;
@@ -496,6 +496,7 @@ impl Aggregate {
         let kinds = self.instances.iter().map(|inst| match inst.shape {
             Shape::Sphere => Some(lanes::Kind::Sphere),
             Shape::Cube => Some(lanes::Kind::Cube),
+            Shape::Cylinder { capped } => Some(lanes::Kind::Cylinder { capped }),
             Shape::Rectangle => Some(lanes::Kind::Rectangle),
             Shape::Disk => Some(lanes::Kind::Disk),
             Shape::Plane => Some(lanes::Kind::Plane),
