@@ -394,6 +394,7 @@ const TIE: u32 = u32::MAX - 1;
 
 /// For each lane, the instance whose candidate is closest ([`NONE`], or [`TIE`]), and its
 /// distance.
+#[inline(always)]
 fn winners(items: &[Item], lanes: &Rays, t_min: Real, bound: &L) -> ([u32; BATCH], L) {
     let mut best_t = [Real::INFINITY; BATCH];
     let mut best = [NONE; BATCH];
@@ -596,6 +597,53 @@ pub(super) fn intersect<const UV: bool>(
     t_max: &[Real],
     out: &mut [Option<Hit>],
 ) -> u64 {
+    #[cfg(target_arch = "x86_64")]
+    if wide() {
+        // SAFETY: the processor has the features `intersect_wide` is compiled for.
+        return unsafe { intersect_wide::<UV>(items, rays, t_min, t_max, out) };
+    }
+    search::<UV>(items, rays, t_min, t_max, out)
+}
+
+/// Whether the processor has AVX-512 (F, VL, DQ, BW), for which [`intersect_wide`] is
+/// compiled.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn wide() -> bool {
+    std::is_x86_feature_detected!("avx512f")
+        && std::is_x86_feature_detected!("avx512vl")
+        && std::is_x86_feature_detected!("avx512dq")
+        && std::is_x86_feature_detected!("avx512bw")
+}
+
+/// [`search`] compiled for AVX-512: 16 `f32` lanes a register, so a `BATCH` of values
+/// is one register. The same operations on the same values, so the same bits (IEEE 754
+/// arithmetic, square roots and conversions are exact in both encodings; Rust fuses no
+/// multiply and add); `wide_search_gives_the_bits_of_the_search` compares the two.
+///
+/// # Safety
+/// The processor must have AVX-512 F, VL, DQ and BW ([`wide`]).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw")]
+unsafe fn intersect_wide<const UV: bool>(
+    items: &[Item],
+    rays: &[Ray],
+    t_min: Real,
+    t_max: &[Real],
+    out: &mut [Option<Hit>],
+) -> u64 {
+    search::<UV>(items, rays, t_min, t_max, out)
+}
+
+/// [`intersect`] in the encoding the caller was compiled for.
+#[inline(always)]
+fn search<const UV: bool>(
+    items: &[Item],
+    rays: &[Ray],
+    t_min: Real,
+    t_max: &[Real],
+    out: &mut [Option<Hit>],
+) -> u64 {
     let lanes = Rays::of(rays);
     let mut bound = [Real::INFINITY; BATCH];
     bound[..t_max.len()].copy_from_slice(t_max);
@@ -668,4 +716,97 @@ pub(super) fn intersect<const UV: bool>(
         };
     }
     ties
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+    use crate::sampler::{mix64, to_unit};
+
+    /// The search compiled for AVX-512 gives the bits of the search compiled for the
+    /// build's target, hit by hit and field by field (with uv and without), on random
+    /// items of every kind under random maps (any matrices: both read the same values)
+    /// and random rays, ties included (copies of an item). Skipped on a processor without
+    /// AVX-512, where only the plain search runs.
+    #[test]
+    fn wide_search_gives_the_bits_of_the_search() {
+        if !wide() {
+            eprintln!("no AVX-512 here: only the plain search runs");
+            return;
+        }
+        let mut state = 7u64;
+        let mut next = move |lo: f64, hi: f64| {
+            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            (lo + (hi - lo) * to_unit(mix64(state))) as Real
+        };
+        let kinds = [
+            Kind::Sphere,
+            Kind::Cube,
+            Kind::Cylinder { capped: true },
+            Kind::Cylinder { capped: false },
+            Kind::Rectangle,
+            Kind::Disk,
+            Kind::Plane,
+        ];
+        let mut compared = 0;
+        for scene in 0..200 {
+            let n = 1 + (scene % MAX_INSTANCES);
+            let mut items: Vec<Item> = (0..n)
+                .map(|k| {
+                    let kind = kinds[(next(0.0, 7.0) as usize).min(6)];
+                    let xf = (k % 4 != 0).then(|| {
+                        let m = [0.0; 9].map(|_| next(-2.0, 2.0));
+                        let inv = [0.0; 9].map(|_| next(-2.0, 2.0));
+                        let c = Vec3::new(next(-3.0, 3.0), next(-3.0, 3.0), next(-3.0, 3.0));
+                        (Mat3::from_cols_array(&inv), Mat3::from_cols_array(&m), c)
+                    });
+                    Item::new(kind, xf, k as u32, k as u32 + 1, k as u64)
+                })
+                .collect();
+            if scene % 5 == 0 {
+                items.push(items[0]);
+            }
+            let rays: Vec<Ray> = (0..1 + scene % BATCH)
+                .map(|_| {
+                    let o = Vec3::new(next(-4.0, 4.0), next(-4.0, 4.0), next(-4.0, 4.0));
+                    let d = Vec3::new(next(-1.0, 1.0), next(-1.0, 1.0), next(-1.0, 1.0));
+                    Ray::new(o, d)
+                })
+                .collect();
+            let t_max: Vec<Real> = rays.iter().map(|_| next(0.5, 20.0)).collect();
+            let t_min = if scene % 2 == 0 { 0.0 } else { 1e-3 };
+            for uv in [false, true] {
+                let (mut plain, mut wide_out) = (vec![None; rays.len()], vec![None; rays.len()]);
+                let (ties, wide_ties) = if uv {
+                    (
+                        search::<true>(&items, &rays, t_min, &t_max, &mut plain),
+                        // SAFETY: `wide()` said the processor has the features.
+                        unsafe {
+                            intersect_wide::<true>(&items, &rays, t_min, &t_max, &mut wide_out)
+                        },
+                    )
+                } else {
+                    (
+                        search::<false>(&items, &rays, t_min, &t_max, &mut plain),
+                        // SAFETY: as above.
+                        unsafe {
+                            intersect_wide::<false>(&items, &rays, t_min, &t_max, &mut wide_out)
+                        },
+                    )
+                };
+                assert_eq!(ties, wide_ties, "scene {scene}: the tied lanes differ");
+                for (l, (a, b)) in plain.iter().zip(&wide_out).enumerate() {
+                    assert_eq!(
+                        format!("{a:?}"),
+                        format!("{b:?}"),
+                        "scene {scene}, ray {l} ({:?}), uv {uv}: the AVX-512 search \
+                         (aggregate/lanes.rs intersect_wide) differs from the plain one",
+                        rays[l]
+                    );
+                    compared += a.is_some() as usize;
+                }
+            }
+        }
+        assert!(compared > 300, "only {compared} hits compared");
+    }
 }
