@@ -1380,8 +1380,8 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
     assert!(hits > 1500, "only {hits} rays hit");
 }
 
-/// The cylinder's edge cases in lanes (aggregate/lanes.rs `CylinderLane`), each exactly
-/// as `intersect` decides it: rays along the axis (no side roots: a cap counts when the
+/// The cylinder's edge cases in lanes (`Crossing` of shapes/cylinder.rs, lane by lane),
+/// each exactly as `intersect` decides it: rays along the axis (no side roots: a cap counts when the
 /// ray runs inside the radius, on it included), rays parallel to the caps (the slab is
 /// everything or nothing), rays through a rim (a side root equal to the slab's end), and
 /// rays from a point on the cap, the rim and the side, on the unplaced cylinder, capped
@@ -1450,7 +1450,7 @@ fn cylinder_edges_in_lanes_match_one_at_a_time() {
                     hit_bits(got),
                     hit_bits(&alone),
                     "cylinder (capped: {capped}), {r:?}: the lanes' cylinder \
-                     (renderer/src/aggregate/lanes.rs CylinderLane) differs from \
+                     (shapes/cylinder.rs Crossing, lane by lane in aggregate/lanes.rs) differs from \
                      shapes/cylinder.rs"
                 );
                 hits += alone.is_some() as usize;

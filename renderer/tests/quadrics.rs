@@ -183,6 +183,59 @@ fn cylinder_open() {
     check(&s, [0., 0., 0.], [0., 1., 0.], Miss);
 }
 
+/// Rays aimed at points of the cylinder's rims from anywhere (4,096 of them, capped and
+/// open): every hit is a point of the surface within its error bound, and a side point
+/// lies in the slab −1 ≤ y ≤ 1 exactly (`o.y + t·d.y` rounds across a rim, and the side's
+/// y is clamped back). And a ray down the line of the wall, x² + z² = 1 exactly, meets the
+/// cap at its rim: the radius test is closed, as the side's interval is.
+#[test]
+fn cylinder_rims() {
+    let mut state = 1u64;
+    let mut next = move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for capped in [true, false] {
+        let s = Shape::Cylinder { capped };
+        let mut side = 0;
+        for _ in 0..4096 {
+            let turn = next() * 2.0 * PI;
+            let y = if next() < 0.5 { 1.0 } else { -1.0 };
+            let o = [next() * 8.0 - 4.0, next() * 8.0 - 4.0, next() * 8.0 - 4.0];
+            let d = [turn.cos() - o[0], y - o[1], turn.sin() - o[2]];
+            let r = ray(o, d);
+            let Some(h) = s.intersect(&r, 0.0, INF) else {
+                continue;
+            };
+            check_record(&s, &r, &h);
+            assert!(
+                (-1.0..=1.0).contains(&h.p.y),
+                "{} o={o:?} d={d:?}: the hit's y {} is outside the slab \
+                 (renderer/src/shapes/cylinder.rs Crossing::record)",
+                name(&s),
+                h.p.y
+            );
+            side += (h.n_geo.y == 0.0) as usize;
+        }
+        assert!(side > 1000, "only {side} side hits");
+    }
+    let s = Shape::Cylinder { capped: true };
+    check(
+        &s,
+        [1., 5., 0.],
+        [0., -1., 0.],
+        hit(4.0, [0., 1., 0.], [1.0, 0.5]),
+    );
+    check(
+        &s,
+        [0., -5., -1.],
+        [0., 1., 0.],
+        hit(4.0, [0., -1., 0.], [0.5, 0.0]),
+    );
+}
+
 #[test]
 fn cone_capped() {
     let s = Shape::Cone { capped: true };

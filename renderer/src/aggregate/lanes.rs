@@ -9,9 +9,10 @@
 //! The module reads nothing of the aggregate (whose module uses it): the aggregate hands it
 //! each instance's shape and maps as an [`Item`], and answers the tied rays itself. The tests
 //! are the scalar ones written lane by lane with the same operations in the same order
-//! (`shapes::flat`, `shapes::sphere`, `shapes::cube`, `shapes::cylinder`, the transform's
-//! `inv_ray`, the lead's `object_ray`), so each lane computes the bits the scalar test
-//! computes; so is the winner's record, built and mapped out of object space in lanes as
+//! (`shapes::flat`, `shapes::sphere`, `shapes::cube`, the transform's `inv_ray`, the
+//! lead's `object_ray`; the cylinder's is the scalar test itself, `shapes::cylinder`'s
+//! `Crossing`, written without branches and called lane by lane), so each lane computes
+//! the bits the scalar test computes; so is the winner's record, built and mapped out of object space in lanes as
 //! the shape and the instance build and map it (`map_point_with_error`, `map_normal`),
 //! for each instance that some lane's ray hits first (the cylinder's azimuth, an
 //! `atan2`, lane by lane for the lanes it wins). The scalar search keeps the first of equal
@@ -31,6 +32,7 @@ use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{gamma, Mat3, Real, Vec2, Vec3};
 use crate::shapes;
+use crate::shapes::cylinder::{self, Crossing};
 
 /// The most instances an aggregate may hold to be searched in lanes: above it, the tree
 /// skips more tests than the lanes save.
@@ -95,6 +97,16 @@ impl Rays {
         o: [[0.0; BATCH]; 3],
         d: [[0.0; BATCH]; 3],
     };
+
+    /// Lane `l`'s origin and direction.
+    #[inline(always)]
+    fn lane(&self, l: usize) -> (Vec3, Vec3) {
+        let (o, d) = (&self.o, &self.d);
+        (
+            Vec3::new(o[0][l], o[1][l], o[2][l]),
+            Vec3::new(d[0][l], d[1][l], d[2][l]),
+        )
+    }
 
     /// `rays` (at most `BATCH`) as lanes; the lanes past the last ray repeat it.
     fn of(rays: &[Ray]) -> Rays {
@@ -178,125 +190,7 @@ impl SphereLines {
         let (a, b) = (self.a[l] as Real, self.b[l] as Real);
         let (ox, oy, oz) = (r.o[0][l], r.o[1][l], r.o[2][l]);
         let c = ox * ox + oy * oy + oz * oz - 1.0;
-        stable_roots(a, b, c, disc)
-    }
-}
-
-/// `shapes::stable_roots` without its branch, so that a loop over lanes stays vector
-/// code: the same values (a lane with `disc < 0` gets NaNs its caller masks).
-#[inline(always)]
-fn stable_roots(a: Real, b: Real, c: Real, disc: Real) -> (Real, Real) {
-    let s = disc.sqrt();
-    let q = -(b + s.copysign(b));
-    let (r0, r1) = (q / a, c / q);
-    let (t0, t1) = if r0 <= r1 { (r0, r1) } else { (r1, r0) };
-    if q == 0.0 {
-        (0.0, 0.0)
-    } else {
-        (t0, t1)
-    }
-}
-
-/// What `shapes::cylinder::intersect` computes for lane `l` before it chooses: the slab
-/// −1 ≤ y ≤ 1 as an interval of t (`slab`), whose ends are the caps' distances; the
-/// side's line in `f64` (the squared length `a` of the direction in xz, the point `l`
-/// of the line nearest the axis, the direction, the discriminant) and its roots, which
-/// count only where `roots` (`a > 0` and `disc ≥ 0`).
-struct CylinderLane {
-    ty: (Real, Real),
-    caps: (Real, Real),
-    parallel: bool,
-    a64: f64,
-    l: (f64, f64),
-    d: (f64, f64),
-    disc64: f64,
-    a: Real,
-    /// `x² + z²` of the origin.
-    rr: Real,
-    t: (Real, Real),
-    roots: bool,
-}
-
-/// Which of a cylinder's candidates a lane takes.
-const SIDE_NEAR: u32 = 0;
-const SIDE_FAR: u32 = 1;
-const CAP_LOW: u32 = 2;
-const CAP_HIGH: u32 = 3;
-const MISSED: u32 = 4;
-
-impl CylinderLane {
-    #[inline(always)]
-    fn of(r: &Rays, l: usize) -> CylinderLane {
-        let (oy, dy) = (r.o[1][l], r.d[1][l]);
-        let parallel = dy == 0.0;
-        let (ya, yb) = ((-1.0 - oy) / dy, (1.0 - oy) / dy);
-        let within = (-1.0 <= oy) & (oy <= 1.0);
-        let (lo, hi) = if within {
-            (Real::NEG_INFINITY, Real::INFINITY)
-        } else {
-            (Real::INFINITY, Real::NEG_INFINITY)
-        };
-        let ty = if parallel {
-            (lo, hi)
-        } else {
-            (ya.min(yb), ya.max(yb))
-        };
-        let (ox, oz) = (r.o[0][l], r.o[2][l]);
-        let (ox64, oz64, dx64, dz64) = (ox as f64, oz as f64, r.d[0][l] as f64, r.d[2][l] as f64);
-        let a64 = dx64 * dx64 + dz64 * dz64;
-        let a = a64 as Real;
-        let b64 = ox64 * dx64 + oz64 * dz64;
-        let (lx, lz) = (ox64 - dx64 * (b64 / a64), oz64 - dz64 * (b64 / a64));
-        let disc64 = a64 * (1.0 - (lx * lx + lz * lz));
-        let (b, disc) = (b64 as Real, disc64 as Real);
-        let rr = ox * ox + oz * oz;
-        CylinderLane {
-            ty,
-            caps: (ya, yb),
-            parallel,
-            a64,
-            l: (lx, lz),
-            d: (dx64, dz64),
-            disc64,
-            a,
-            rr,
-            t: stable_roots(a, b, rr - 1.0, disc),
-            roots: (a > 0.0) & (disc >= 0.0),
-        }
-    }
-
-    /// The candidate `intersect` keeps in `(t_min, t_max)`: its distance (infinity for
-    /// none) and which it is ([`SIDE_NEAR`] to [`MISSED`]). The side's first root inside
-    /// the slab, then each cap (y = −1, then 1) whose distance is closer and lies between
-    /// the side's roots (or, parallel to the axis, whose ray runs inside the radius).
-    #[inline(always)]
-    fn pick(&self, capped: bool, t_min: Real, t_max: Real) -> (Real, u32) {
-        let (t0, t1) = self.t;
-        let on_side = |t: Real| (t > t_min) & (t < t_max) & (self.ty.0 <= t) & (t <= self.ty.1);
-        let (in0, in1) = (self.roots & on_side(t0), self.roots & on_side(t1));
-        let (mut bound, mut which) = if in0 {
-            (t0, SIDE_NEAR)
-        } else if in1 {
-            (t1, SIDE_FAR)
-        } else {
-            (t_max, MISSED)
-        };
-        let along_axis = (self.a == 0.0) & (self.rr <= 1.0);
-        for (t, cap) in [(self.caps.0, CAP_LOW), (self.caps.1, CAP_HIGH)] {
-            let inside = if self.roots {
-                (t0 <= t) & (t <= t1)
-            } else {
-                along_axis
-            };
-            let take = capped & !self.parallel & (t > t_min) & (t < bound) & inside;
-            bound = if take { t } else { bound };
-            which = if take { cap } else { which };
-        }
-        if which == MISSED {
-            (Real::INFINITY, MISSED)
-        } else {
-            (bound, which)
-        }
+        shapes::stable_roots(a, b, c, disc)
     }
 }
 
@@ -364,7 +258,8 @@ fn distances(kind: Kind, r: &Rays, t_min: Real, t_max: &L) -> L {
         }
         Kind::Cylinder { capped } => {
             for l in 0..BATCH {
-                t[l] = CylinderLane::of(r, l).pick(capped, t_min, t_max[l]).0;
+                let (o, d) = r.lane(l);
+                t[l] = Crossing::of(o, d).pick(capped, t_min, t_max[l]).0;
             }
         }
         Kind::Rectangle | Kind::Disk | Kind::Plane => {
@@ -495,46 +390,17 @@ fn records(kind: Kind, r: &Rays, t_min: Real, t_max: &L, t: &L) -> Records {
             }
         }
         Kind::Cylinder { capped } => {
-            let (g3, g4) = (gamma(3), gamma(4));
             for l in 0..BATCH {
-                // `pick` again, for the candidate, then its record as `intersect` builds
-                // it: on the side, the point in xz as l ∓ d·√disc/a re-projected onto
-                // the radius (or, with nothing left of it, the side facing the ray), y
-                // clamped to the slab; on a cap, `ray.at(t)` put on the cap's plane.
-                let lane = CylinderLane::of(r, l);
-                let (_, which) = lane.pick(capped, t_min, t_max[l]);
-                let side: f64 = if which == SIDE_NEAR { -1.0 } else { 1.0 };
-                let f = side * lane.disc64.sqrt() / lane.a64;
-                let x = (lane.l.0 + lane.d.0 * f) as Real;
-                let z = (lane.l.1 + lane.d.1 * f) as Real;
-                let rad = (x * x + z * z).sqrt();
-                let kept = (rad > 0.0) & (rad.abs() < Real::INFINITY);
-                let (x, z, rad) = if kept {
-                    (x, z, rad)
-                } else {
-                    (-r.d[0][l], -r.d[2][l], lane.a.sqrt())
-                };
-                let y = (r.o[1][l] + t[l] * r.d[1][l]).clamp(-1.0, 1.0);
-                let on_side = (which == SIDE_NEAR) | (which == SIDE_FAR);
-                let cap_y: Real = if which == CAP_LOW { -1.0 } else { 1.0 };
-                let cx = r.o[0][l] + r.d[0][l] * t[l];
-                let cz = r.o[2][l] + r.d[2][l] * t[l];
-                let p = if on_side {
-                    [x / rad, y, z / rad]
-                } else {
-                    [cx, cap_y, cz]
-                };
-                let g = if on_side { [g3, g4, g3] } else { [g4, 0.0, g4] };
-                for c in 0..3 {
-                    rec.p[c][l] = p[c];
-                    rec.err[c][l] = p[c].abs() * g[c];
+                // `pick` again, for the candidate, then its record.
+                let (o, d) = r.lane(l);
+                let c = Crossing::of(o, d);
+                let (_, part) = c.pick(capped, t_min, t_max[l]);
+                let (p, err, n, uv) = c.record(o, d, part, t[l]);
+                for (field, v) in [(&mut rec.p, p), (&mut rec.err, err), (&mut rec.n, n)] {
+                    (field[0][l], field[1][l], field[2][l]) = (v.x, v.y, v.z);
                 }
-                rec.n[0][l] = if on_side { p[0] } else { 0.0 };
-                rec.n[1][l] = if on_side { 0.0 } else { cap_y };
-                rec.n[2][l] = if on_side { p[2] } else { 0.0 };
-                rec.uv[0][l] = (p[0] + 1.0) * 0.5;
-                rec.uv[1][l] = if on_side { p[1] + 1.0 } else { p[2] + 1.0 } * 0.5;
-                rec.side[l] = on_side;
+                (rec.uv[0][l], rec.uv[1][l]) = (uv.x, uv.y);
+                rec.side[l] = part <= cylinder::SIDE_FAR;
             }
         }
         Kind::Rectangle | Kind::Disk | Kind::Plane => {

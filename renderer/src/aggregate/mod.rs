@@ -165,6 +165,7 @@ impl Shape {
             Shape::Rectangle => shapes::flat::rectangle_hits(ray, t_min, t_max),
             Shape::Disk => shapes::flat::disk_hits(ray, t_min, t_max),
             Shape::Cube => shapes::cube::hits(ray, t_min, t_max),
+            Shape::Cylinder { capped } => shapes::cylinder::hits(ray, *capped, t_min, t_max),
             Shape::Mesh(m) => m.occluded(ray, t_min, t_max),
             Shape::Group(g) => g.occluded(ray, t_min, t_max),
             Shape::Anchored(a) => a.intersect_bare(ray, t_min, t_max).is_some(),

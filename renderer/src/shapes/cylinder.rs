@@ -10,78 +10,186 @@ use crate::real::{gamma, Real, Vec2, Vec3};
 /// ((x+1)/2, (z+1)/2).
 #[inline]
 pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hit> {
-    let mut best: Option<Hit> = None;
-    let mut t_max = t_max;
-    let (o, d) = (ray.o, ray.d);
-    // The slab −1 ≤ y ≤ 1 and the infinite cylinder as intervals of t. A side hit counts
-    // when its t lies in the slab's interval, a cap hit when its t lies between the side's
-    // roots: the same computed values decide both, so a ray entering exactly at a rim
-    // takes the later of the two entries, as in the box's slab test. (Testing the y of one
-    // rounded point and the radius of another left a gap: 1.8 % of the rays aimed at a
-    // rim from inside the solid's tangent cone missed in f32.)
-    let (ty0, ty1) = slab(o.y, d.y);
-    // a, b, l and the discriminant in f64, in both builds, as for the sphere: in f32 the
-    // products d·(b/a), of size |o|, move l by ε·|o|, so a far cylinder (|o| ≫ 1 in
-    // object space) got wrong hits and misses near its silhouette.
-    let (ox, oz, dx, dz) = (o.x as f64, o.z as f64, d.x as f64, d.z as f64);
-    let a64 = dx * dx + dz * dz;
-    let a = a64 as Real;
-    let mut roots: Option<(Real, Real)> = None;
-    if a > 0.0 {
+    let c = Crossing::of(ray.o, ray.d);
+    let (t, part) = c.pick(capped, t_min, t_max);
+    if part == MISSED {
+        return None;
+    }
+    let (p, err, n, mut uv) = c.record(ray.o, ray.d, part, t);
+    if part <= SIDE_FAR {
+        uv.x = azimuth(p.x, p.z);
+    }
+    Some(local_hit(t, p, err, n, uv))
+}
+
+/// Whether the cylinder is hit with `t_min < t < t_max`: [`intersect`]'s choice without
+/// its record (shadow rays).
+#[inline]
+pub fn hits(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> bool {
+    Crossing::of(ray.o, ray.d).pick(capped, t_min, t_max).1 != MISSED
+}
+
+/// Which of the cylinder's candidates a ray takes ([`Crossing::pick`]): the side's first
+/// or second root, the cap at y = −1 or at y = 1, or none.
+pub(crate) const SIDE_NEAR: u32 = 0;
+pub(crate) const SIDE_FAR: u32 = 1;
+pub(crate) const CAP_LOW: u32 = 2;
+pub(crate) const CAP_HIGH: u32 = 3;
+pub(crate) const MISSED: u32 = 4;
+
+/// What the test computes for a ray before it chooses: the slab −1 ≤ y ≤ 1 as an interval
+/// of t ([`slab`]), whose ends are the caps' distances, and the infinite cylinder's
+/// roots. Written without branches (selects on computed values, `&` for `&&`), so that
+/// the lanes (aggregate/lanes.rs), which call it lane by lane, stay vector code.
+///
+/// The side's line is in f64, in both builds, as for the sphere: in f32 the products
+/// d·(b/a), of size |o|, move l by ε·|o|, so a far cylinder (|o| ≫ 1 in object space) got
+/// wrong hits and misses near its silhouette.
+pub(crate) struct Crossing {
+    ty: (Real, Real),
+    caps: (Real, Real),
+    parallel: bool,
+    /// `a = dx² + dz²`, in f64 and in `Real`.
+    a64: f64,
+    a: Real,
+    /// The point of the line nearest the axis, in xz.
+    l: (f64, f64),
+    d: (f64, f64),
+    disc64: f64,
+    /// `x² + z²` of the origin.
+    rr: Real,
+    t: (Real, Real),
+    /// Whether the side has roots: `a > 0` and `disc ≥ 0` (else `t` is not read).
+    roots: bool,
+}
+
+impl Crossing {
+    #[inline(always)]
+    pub(crate) fn of(o: Vec3, d: Vec3) -> Crossing {
+        let (ya, yb) = ((-1.0 - o.y) / d.y, (1.0 - o.y) / d.y);
+        let parallel = d.y == 0.0;
+        let within = (-1.0 <= o.y) & (o.y <= 1.0);
+        let (lo, hi) = if within {
+            (Real::NEG_INFINITY, Real::INFINITY)
+        } else {
+            (Real::INFINITY, Real::NEG_INFINITY)
+        };
+        let ty = if parallel {
+            (lo, hi)
+        } else {
+            (ya.min(yb), ya.max(yb))
+        };
+        let (ox, oz, dx, dz) = (o.x as f64, o.z as f64, d.x as f64, d.z as f64);
+        let a64 = dx * dx + dz * dz;
+        let a = a64 as Real;
         let b64 = ox * dx + oz * dz;
-        let (lx64, lz64) = (ox - dx * (b64 / a64), oz - dz * (b64 / a64));
-        let disc64 = a64 * (1.0 - (lx64 * lx64 + lz64 * lz64));
+        let (lx, lz) = (ox - dx * (b64 / a64), oz - dz * (b64 / a64));
+        let disc64 = a64 * (1.0 - (lx * lx + lz * lz));
         let (b, disc) = (b64 as Real, disc64 as Real);
-        if disc >= 0.0 {
-            let c = o.x * o.x + o.z * o.z - 1.0;
-            let (t0, t1) = stable_roots(a, b, c, disc);
-            roots = Some((t0, t1));
-            for (t, side) in [(t0, -1.0), (t1, 1.0)] {
-                if t > t_min && t < t_max && ty0 <= t && t <= ty1 {
-                    // The point in xz as l ∓ d·√disc/a (l: the line's closest point to the
-                    // axis), not o + t·d, which cancels when |o| ≫ 1 (a far or flattened
-                    // instance seen in object space), down to the axis itself and a NaN.
-                    let k = side * disc64.sqrt() / a64;
-                    let (mut x, mut z) = ((lx64 + dx * k) as Real, (lz64 + dz * k) as Real);
-                    let mut r = (x * x + z * z).sqrt();
-                    if !(r > 0.0 && r.is_finite()) {
-                        // Nothing left of the point: the side facing the ray.
-                        (x, z, r) = (-d.x, -d.z, a.sqrt());
-                    }
-                    // Re-project onto radius 1 in xz (pbrt), error γ(3)·|x|, γ(3)·|z|.
-                    let y = (o.y + t * d.y).clamp(-1.0, 1.0);
-                    let p = Vec3::new(x / r, y, z / r);
-                    let err = p.abs() * Vec3::new(gamma(3), gamma(4), gamma(3));
-                    let n = Vec3::new(p.x, 0.0, p.z);
-                    let uv = Vec2::new(azimuth(p.x, p.z), (p.y + 1.0) * 0.5);
-                    best = Some(local_hit(t, p, err, n, uv));
-                    t_max = t;
-                    break;
-                }
-            }
+        let rr = o.x * o.x + o.z * o.z;
+        Crossing {
+            ty,
+            caps: (ya, yb),
+            parallel,
+            a64,
+            a,
+            l: (lx, lz),
+            d: (dx, dz),
+            disc64,
+            rr,
+            t: stable_roots(a, b, rr - 1.0, disc),
+            roots: (a > 0.0) & (disc >= 0.0),
         }
     }
-    if capped && d.y != 0.0 {
-        for y in [-1.0 as Real, 1.0] {
-            let t = (y - o.y) / d.y;
-            if t > t_min && t < t_max {
-                let inside = match roots {
-                    Some((t0, t1)) => t0 <= t && t <= t1,
-                    // Parallel to the axis: inside everywhere or nowhere.
-                    None => a == 0.0 && o.x * o.x + o.z * o.z <= 1.0,
-                };
-                if inside {
-                    let mut p = ray.at(t);
-                    p.y = y;
-                    let err = Vec3::new(p.x.abs(), 0.0, p.z.abs()) * gamma(4);
-                    let uv = Vec2::new((p.x + 1.0) * 0.5, (p.z + 1.0) * 0.5);
-                    best = Some(local_hit(t, p, err, Vec3::new(0.0, y, 0.0), uv));
-                    t_max = t;
-                }
-            }
+
+    /// The candidate the test keeps in `(t_min, t_max)`: its distance (infinity for none)
+    /// and which it is ([`SIDE_NEAR`] to [`MISSED`]). The side's first root inside the
+    /// slab; then each cap (y = −1, then 1) whose distance is closer and lies between the
+    /// side's roots (or, parallel to the axis, whose ray runs inside the radius). The same
+    /// computed values decide the side and the caps, so a ray entering exactly at a rim
+    /// takes the later of the two entries, as in the box's slab test. (Testing the y of
+    /// one rounded point and the radius of another left a gap: 1.8 % of the rays aimed
+    /// at a rim from inside the solid's tangent cone missed in f32.)
+    #[inline(always)]
+    pub(crate) fn pick(&self, capped: bool, t_min: Real, t_max: Real) -> (Real, u32) {
+        let (t0, t1) = self.t;
+        let on_side = |t: Real| (t > t_min) & (t < t_max) & (self.ty.0 <= t) & (t <= self.ty.1);
+        let (in0, in1) = (self.roots & on_side(t0), self.roots & on_side(t1));
+        let (mut bound, mut part) = if in0 {
+            (t0, SIDE_NEAR)
+        } else if in1 {
+            (t1, SIDE_FAR)
+        } else {
+            (t_max, MISSED)
+        };
+        let along_axis = (self.a == 0.0) & (self.rr <= 1.0);
+        for (t, cap) in [(self.caps.0, CAP_LOW), (self.caps.1, CAP_HIGH)] {
+            let inside = if self.roots {
+                (t0 <= t) & (t <= t1)
+            } else {
+                along_axis
+            };
+            let take = capped & !self.parallel & (t > t_min) & (t < bound) & inside;
+            bound = if take { t } else { bound };
+            part = if take { cap } else { part };
+        }
+        if part == MISSED {
+            (Real::INFINITY, MISSED)
+        } else {
+            (bound, part)
         }
     }
-    best
+
+    /// The record of the candidate `part` at `t` for the ray `(o, d)`: the point, its
+    /// error bound, the normal and the uv, with a side point's u left at `(x + 1)/2` (the
+    /// caller takes the azimuth, an `atan2`, once it knows the hit is kept).
+    /// - On the side, the point in xz is l ∓ d·√disc/a (l: the line's closest point to
+    ///   the axis), not o + t·d, which cancels when |o| ≫ 1 (a far or flattened instance
+    ///   seen in object space), down to the axis itself and a NaN; with nothing left of
+    ///   it, the side facing the ray. Re-projected onto radius 1 in xz (pbrt), error
+    ///   γ(3)·|x|, γ(3)·|z|; y is `o.y + t·d.y` clamped to the slab, error γ(4)·|y|.
+    /// - On a cap, `o + t·d` put on the cap's plane, error γ(4)·|x|, γ(4)·|z|.
+    #[inline(always)]
+    pub(crate) fn record(&self, o: Vec3, d: Vec3, part: u32, t: Real) -> (Vec3, Vec3, Vec3, Vec2) {
+        let side: f64 = if part == SIDE_NEAR { -1.0 } else { 1.0 };
+        let k = side * self.disc64.sqrt() / self.a64;
+        let x = (self.l.0 + self.d.0 * k) as Real;
+        let z = (self.l.1 + self.d.1 * k) as Real;
+        let r = (x * x + z * z).sqrt();
+        let kept = (r > 0.0) & (r.abs() < Real::INFINITY);
+        let (x, z, r) = if kept {
+            (x, z, r)
+        } else {
+            (-d.x, -d.z, self.a.sqrt())
+        };
+        let y = (o.y + t * d.y).clamp(-1.0, 1.0);
+        let on_side = part <= SIDE_FAR;
+        let cap_y: Real = if part == CAP_LOW { -1.0 } else { 1.0 };
+        let at = o + d * t;
+        let p = if on_side {
+            Vec3::new(x / r, y, z / r)
+        } else {
+            Vec3::new(at.x, cap_y, at.z)
+        };
+        let (g3, g4) = (gamma(3), gamma(4));
+        let g = if on_side {
+            Vec3::new(g3, g4, g3)
+        } else {
+            Vec3::new(g4, 0.0, g4)
+        };
+        let n = if on_side {
+            Vec3::new(p.x, 0.0, p.z)
+        } else {
+            Vec3::new(0.0, cap_y, 0.0)
+        };
+        let v = if on_side { p.y } else { p.z };
+        (
+            p,
+            p.abs() * g,
+            n,
+            Vec2::new((p.x + 1.0) * 0.5, (v + 1.0) * 0.5),
+        )
+    }
 }
 
 /// The interval of t in which `o_y + t·d_y` lies in [−1, 1] (empty when `d_y = 0` and the

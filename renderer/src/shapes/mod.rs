@@ -41,19 +41,19 @@ pub(crate) fn local_hit(t: Real, p: Vec3, err: Vec3, n: Vec3, uv: Vec2) -> Hit {
 
 /// Roots of `a·t² + 2·b·t + c = 0`, given `disc = b² − a·c ≥ 0` and `a > 0`, in
 /// ascending order, computed without cancellation (Haines et al., Ray Tracing Gems ch. 7).
-#[inline]
+/// Written with selects, not branches, so that the lanes (aggregate/lanes.rs), which call
+/// it lane by lane, stay vector code (a lane with `disc < 0` gets NaNs its caller masks).
+#[inline(always)]
 pub(crate) fn stable_roots(a: Real, b: Real, c: Real, disc: Real) -> (Real, Real) {
     let s = disc.sqrt();
     let q = -(b + s.copysign(b));
+    let (r0, r1) = (q / a, c / q);
+    let (t0, t1) = if r0 <= r1 { (r0, r1) } else { (r1, r0) };
     if q == 0.0 {
         // b = 0 and disc = 0: a double root at 0 (c = 0).
-        return (0.0, 0.0);
-    }
-    let (r0, r1) = (q / a, c / q);
-    if r0 <= r1 {
-        (r0, r1)
+        (0.0, 0.0)
     } else {
-        (r1, r0)
+        (t0, t1)
     }
 }
 
