@@ -1268,10 +1268,11 @@ fn meshes_give_their_triangles_back_in_the_given_order() {
 }
 
 /// A small scene of spheres, cubes, cylinders (capped or open), rectangles, disks and
-/// planes is searched in lanes by `intersect_many` (aggregate/lanes.rs): every ray must
-/// get exactly the hit `intersect` gives it alone, on scenes with general affine instances, unplaced ones, spheres placed
-/// by a scale and a translation (the aggregate's leads), planes beside the tree, and
-/// copies of one instance, where every hit is a tie that the scalar search decides.
+/// planes is searched in lanes by `intersect_many` (aggregate/lanes.rs): every ray must get
+/// exactly the hit `intersect` gives it alone, on scenes with general affine instances,
+/// unplaced ones, spheres placed by a scale and a translation (the aggregate's leads),
+/// planes beside the tree, and copies of one instance, where every hit is a tie that the
+/// scalar search decides.
 #[test]
 fn small_scenes_in_lanes_match_one_at_a_time() {
     let mut rng = SplitMix(2611);

@@ -184,10 +184,11 @@ fn cylinder_open() {
 }
 
 /// Rays aimed at points of the cylinder's rims from anywhere (4,096 of them, capped and
-/// open): every hit is a point of the surface within its error bound, and a side point
-/// lies in the slab −1 ≤ y ≤ 1 exactly (`o.y + t·d.y` rounds across a rim, and the side's
-/// y is clamped back). And a ray down the line of the wall, x² + z² = 1 exactly, meets the
-/// cap at its rim: the radius test is closed, as the side's interval is.
+/// open): `occluded` agrees with `intersect`, every hit is a point of the surface within
+/// its error bound, and a side point lies in the slab −1 ≤ y ≤ 1 exactly (`o.y + t·d.y`
+/// rounds across a rim, and the side's y is clamped back). And a ray down the line of the
+/// wall, x² + z² = 1 exactly, meets the cap at its rim: the radius test is closed, as the
+/// side's interval is.
 #[test]
 fn cylinder_rims() {
     let mut state = 1u64;
@@ -206,7 +207,15 @@ fn cylinder_rims() {
             let o = [next() * 8.0 - 4.0, next() * 8.0 - 4.0, next() * 8.0 - 4.0];
             let d = [turn.cos() - o[0], y - o[1], turn.sin() - o[2]];
             let r = ray(o, d);
-            let Some(h) = s.intersect(&r, 0.0, INF) else {
+            let got = s.intersect(&r, 0.0, INF);
+            assert_eq!(
+                got.is_some(),
+                s.occluded(&r, 0.0, INF),
+                "{} o={o:?} d={d:?}: intersect and occluded disagree \
+                 (renderer/src/shapes/cylinder.rs intersect, hits)",
+                name(&s)
+            );
+            let Some(h) = got else {
                 continue;
             };
             check_record(&s, &r, &h);

@@ -788,7 +788,7 @@ impl Aggregate {
     }
 
     /// Whether [`Aggregate::intersect_many`] tests this aggregate's instances in lanes
-    /// (lanes.rs): a few canonical spheres, cubes, rectangles, disks and planes.
+    /// (lanes.rs): a few canonical spheres, cubes, cylinders, rectangles, disks and planes.
     pub fn searches_in_lanes(&self) -> bool {
         self.lanes.is_some()
     }

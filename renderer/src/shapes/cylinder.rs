@@ -59,7 +59,8 @@ pub(crate) struct Crossing {
     /// `x² + z²` of the origin.
     rr: Real,
     t: (Real, Real),
-    /// Whether the side has roots: `a > 0` and `disc ≥ 0` (else `t` is not read).
+    /// Whether the side has roots: `a > 0` and `disc ≥ 0` (else `t` holds values that
+    /// [`Crossing::pick`] masks out).
     roots: bool,
 }
 
@@ -68,17 +69,7 @@ impl Crossing {
     pub(crate) fn of(o: Vec3, d: Vec3) -> Crossing {
         let (ya, yb) = ((-1.0 - o.y) / d.y, (1.0 - o.y) / d.y);
         let parallel = d.y == 0.0;
-        let within = (-1.0 <= o.y) & (o.y <= 1.0);
-        let (lo, hi) = if within {
-            (Real::NEG_INFINITY, Real::INFINITY)
-        } else {
-            (Real::INFINITY, Real::NEG_INFINITY)
-        };
-        let ty = if parallel {
-            (lo, hi)
-        } else {
-            (ya.min(yb), ya.max(yb))
-        };
+        let ty = slab(o.y, d.y);
         let (ox, oz, dx, dz) = (o.x as f64, o.z as f64, d.x as f64, d.z as f64);
         let a64 = dx * dx + dz * dz;
         let a = a64 as Real;
@@ -193,15 +184,20 @@ impl Crossing {
 }
 
 /// The interval of t in which `o_y + t·d_y` lies in [−1, 1] (empty when `d_y = 0` and the
-/// ray is outside). Its ends are computed exactly as the caps' t.
-#[inline]
+/// ray is outside). Its ends are computed exactly as the caps' t. Written with selects,
+/// not branches, for the lanes ([`Crossing`]).
+#[inline(always)]
 pub(crate) fn slab(o_y: Real, d_y: Real) -> (Real, Real) {
-    if d_y != 0.0 {
-        let (a, b) = ((-1.0 - o_y) / d_y, (1.0 - o_y) / d_y);
-        (a.min(b), a.max(b))
-    } else if (-1.0..=1.0).contains(&o_y) {
+    let (a, b) = ((-1.0 - o_y) / d_y, (1.0 - o_y) / d_y);
+    let within = (-1.0 <= o_y) & (o_y <= 1.0);
+    let (lo, hi) = if within {
         (Real::NEG_INFINITY, Real::INFINITY)
     } else {
         (Real::INFINITY, Real::NEG_INFINITY)
+    };
+    if d_y != 0.0 {
+        (a.min(b), a.max(b))
+    } else {
+        (lo, hi)
     }
 }
