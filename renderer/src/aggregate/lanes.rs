@@ -486,9 +486,11 @@ fn wide() -> bool {
 }
 
 /// [`search`] compiled for AVX-512: 16 `f32` (8 `f64`) a register, so a `BATCH` of
-/// `f32` values is one register. The same operations on the same values, so the same bits (IEEE 754
-/// arithmetic, square roots and conversions are exact in both encodings; Rust fuses no
-/// multiply and add); `wide_search_gives_the_bits_of_the_search` compares the two.
+/// `f32` values is one register. The same operations on the same values, so the same bits
+/// (IEEE 754 arithmetic, square roots and conversions are exact in both encodings; Rust
+/// fuses no multiply and add); `wide_search_gives_the_bits_of_the_search` compares the
+/// two. (Its signature repeats [`intersect`]'s: a `#[target_feature]` function is its own
+/// item.)
 ///
 /// # Safety
 /// The processor must have AVX-512 F, VL, DQ and BW ([`wide`]).
