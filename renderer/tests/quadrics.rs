@@ -245,6 +245,38 @@ fn cylinder_rims() {
     );
 }
 
+/// The cylinder's interval is open at both ends, as every shape's: a root exactly at
+/// `t_min` (a ray leaving the side from a point on it, where the root is −0) or exactly
+/// at `t_max` is not a hit, for the side and for a cap.
+#[test]
+fn cylinder_interval_is_open() {
+    for capped in [true, false] {
+        let s = Shape::Cylinder { capped };
+        let what = name(&s);
+        let leaving = ray([1., 0., 0.], [1., 0., 0.]);
+        assert!(
+            s.intersect(&leaving, 0.0, INF).is_none() && !s.occluded(&leaving, 0.0, INF),
+            "{what}: a ray leaving the side from a point on it hits its own root at t = 0 \
+             (renderer/src/shapes/cylinder.rs Crossing::pick, t > t_min)"
+        );
+        let toward = ray([-5., 0., 0.], [1., 0., 0.]);
+        assert_eq!(s.intersect(&toward, 0.0, INF).map(|h| h.t), Some(4.0));
+        assert!(
+            s.intersect(&toward, 0.0, 4.0).is_none() && !s.occluded(&toward, 0.0, 4.0),
+            "{what}: the side's root at exactly t_max = 4 counts as a hit \
+             (renderer/src/shapes/cylinder.rs Crossing::pick, t < t_max)"
+        );
+    }
+    let s = Shape::Cylinder { capped: true };
+    let down = ray([0.5, 5., 0.], [0., -1., 0.]);
+    assert_eq!(s.intersect(&down, 0.0, INF).map(|h| h.t), Some(4.0));
+    assert!(
+        s.intersect(&down, 0.0, 4.0).is_none() && s.intersect(&down, 4.0, 5.0).is_none(),
+        "the cap at exactly t_max or t_min counts as a hit \
+         (renderer/src/shapes/cylinder.rs Crossing::pick)"
+    );
+}
+
 #[test]
 fn cone_capped() {
     let s = Shape::Cone { capped: true };
