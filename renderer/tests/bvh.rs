@@ -1411,13 +1411,8 @@ fn cylinder_edges_in_lanes_match_one_at_a_time() {
     // of y = ±1 in rounding, which the clamp to the slab takes back.
     let mut rng = SplitMix(7);
     for _ in 0..4096 {
-        let turn = rng.range(0.0, std::f64::consts::TAU);
-        let y = if rng.chance(0.5) { 1.0 } else { -1.0 };
-        let o = rng.vec(-4.0, 4.0);
-        rays.push(Ray::new(
-            vec3(o),
-            vec3(DVec3::new(turn.cos(), y, turn.sin()) - o),
-        ));
+        let (o, d) = rng.toward_cylinder_rim();
+        rays.push(Ray::new(vec3(o), vec3(d)));
     }
     for o in [v(0.25, 1.0, -0.5), v(0.0, -1.0, 1.0), Vec3::Z] {
         for d in [

@@ -13,6 +13,7 @@ use std::f64::consts::PI;
 
 mod common;
 use common::primitives::*;
+use common::SplitMix;
 
 #[test]
 fn sphere() {
@@ -191,21 +192,13 @@ fn cylinder_open() {
 /// side's interval is.
 #[test]
 fn cylinder_rims() {
-    let mut state = 1u64;
-    let mut next = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = SplitMix(1);
     for capped in [true, false] {
         let s = Shape::Cylinder { capped };
         let mut side = 0;
         for _ in 0..4096 {
-            let turn = next() * 2.0 * PI;
-            let y = if next() < 0.5 { 1.0 } else { -1.0 };
-            let o = [next() * 8.0 - 4.0, next() * 8.0 - 4.0, next() * 8.0 - 4.0];
-            let d = [turn.cos() - o[0], y - o[1], turn.sin() - o[2]];
+            let (o, d) = rng.toward_cylinder_rim();
+            let (o, d) = (o.to_array(), d.to_array());
             let r = ray(o, d);
             let got = s.intersect(&r, 0.0, INF);
             assert_eq!(

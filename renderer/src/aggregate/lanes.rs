@@ -403,7 +403,7 @@ fn records(kind: Kind, r: &Rays, t_min: Real, t_max: &L, t: &L) -> Records {
                     (field[0][l], field[1][l], field[2][l]) = (v.x, v.y, v.z);
                 }
                 (rec.uv[0][l], rec.uv[1][l]) = (uv.x, uv.y);
-                rec.side[l] = part <= cylinder::SIDE_FAR;
+                rec.side[l] = cylinder::on_side(part);
             }
         }
         Kind::Rectangle | Kind::Disk | Kind::Plane => {
@@ -527,21 +527,23 @@ fn search<const UV: bool>(
         }
         let object = lanes.mapped(&item.xf);
         let mut rec = records(item.kind, &object, t_min, &bound, &best_t);
-        if UV && item.kind == Kind::Sphere {
-            // `Shape::complete`: the sphere's uv, in object space, lane by lane.
-            for (l, &b) in best[..rays.len()].iter().enumerate() {
-                if b == k as u32 {
-                    let p = Vec3::new(rec.p[0][l], rec.p[1][l], rec.p[2][l]);
-                    let uv = shapes::sphere::uv(p);
-                    (rec.uv[0][l], rec.uv[1][l]) = (uv.x, uv.y);
-                }
-            }
-        }
-        if let Kind::Cylinder { .. } = item.kind {
-            // The side's u, the azimuth of the point in object space, lane by lane.
-            for (l, &b) in best[..rays.len()].iter().enumerate() {
-                if b == k as u32 && rec.side[l] {
-                    rec.uv[0][l] = shapes::azimuth(rec.p[0][l], rec.p[2][l]);
+        // What the scalar search takes only for its winner, lane by lane for the lanes
+        // this item won, in object space: the sphere's uv (`Shape::complete`, when `UV`)
+        // and the cylinder side's u, the azimuth of its point.
+        if matches!(
+            (UV, item.kind),
+            (true, Kind::Sphere) | (_, Kind::Cylinder { .. })
+        ) {
+            for (l, _) in best[..rays.len()]
+                .iter()
+                .enumerate()
+                .filter(|&(_, &b)| b == k as u32)
+            {
+                let p = Vec3::new(rec.p[0][l], rec.p[1][l], rec.p[2][l]);
+                match item.kind {
+                    Kind::Sphere => (rec.uv[0][l], rec.uv[1][l]) = shapes::sphere::uv(p).into(),
+                    _ if rec.side[l] => rec.uv[0][l] = shapes::azimuth(p.x, p.z),
+                    _ => {}
                 }
             }
         }
@@ -607,6 +609,22 @@ mod tests {
         b
     }
 
+    /// The plain search's and the AVX-512 search's answers (tied lanes, hits) for `rays`.
+    /// The processor must have AVX-512 ([`wide`]).
+    #[allow(clippy::type_complexity)]
+    fn both_searches<const UV: bool>(
+        items: &[Item],
+        rays: &[Ray],
+        t_min: Real,
+        t_max: &[Real],
+    ) -> ((u64, Vec<Option<Hit>>), (u64, Vec<Option<Hit>>)) {
+        let (mut plain, mut wide_out) = (vec![None; rays.len()], vec![None; rays.len()]);
+        let ties = search::<UV>(items, rays, t_min, t_max, &mut plain);
+        // SAFETY: the caller checked `wide()`: the processor has the features.
+        let wide_ties = unsafe { intersect_wide::<UV>(items, rays, t_min, t_max, &mut wide_out) };
+        ((ties, plain), (wide_ties, wide_out))
+    }
+
     /// The search compiled for AVX-512 gives the bits of the search compiled for the
     /// build's target, hit by hit and field by field (with uv and without), on random
     /// items of every kind under random maps (any matrices: both read the same values)
@@ -660,25 +678,12 @@ mod tests {
                 .collect();
             let t_max: Vec<Real> = rays.iter().map(|_| next(0.5, 20.0)).collect();
             let t_min = if scene % 2 == 0 { 0.0 } else { 1e-3 };
-            for uv in [false, true] {
-                let (mut plain, mut wide_out) = (vec![None; rays.len()], vec![None; rays.len()]);
-                let (ties, wide_ties) = if uv {
-                    (
-                        search::<true>(&items, &rays, t_min, &t_max, &mut plain),
-                        // SAFETY: `wide()` said the processor has the features.
-                        unsafe {
-                            intersect_wide::<true>(&items, &rays, t_min, &t_max, &mut wide_out)
-                        },
-                    )
-                } else {
-                    (
-                        search::<false>(&items, &rays, t_min, &t_max, &mut plain),
-                        // SAFETY: as above.
-                        unsafe {
-                            intersect_wide::<false>(&items, &rays, t_min, &t_max, &mut wide_out)
-                        },
-                    )
-                };
+            let both = [
+                both_searches::<false>(&items, &rays, t_min, &t_max),
+                both_searches::<true>(&items, &rays, t_min, &t_max),
+            ];
+            for (uv, ((ties, plain), (wide_ties, wide_out))) in [false, true].into_iter().zip(both)
+            {
                 assert_eq!(ties, wide_ties, "scene {scene}: the tied lanes differ");
                 for (l, (a, b)) in plain.iter().zip(&wide_out).enumerate() {
                     assert_eq!(

@@ -16,7 +16,7 @@ pub fn intersect(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> Option<Hi
         return None;
     }
     let (p, err, n, mut uv) = c.record(ray.o, ray.d, part, t);
-    if part <= SIDE_FAR {
+    if on_side(part) {
         uv.x = azimuth(p.x, p.z);
     }
     Some(local_hit(t, p, err, n, uv))
@@ -31,11 +31,17 @@ pub fn hits(ray: &Ray, capped: bool, t_min: Real, t_max: Real) -> bool {
 
 /// Which of the cylinder's candidates a ray takes ([`Crossing::pick`]): the side's first
 /// or second root, the cap at y = −1 or at y = 1, or none.
-pub(crate) const SIDE_NEAR: u32 = 0;
-pub(crate) const SIDE_FAR: u32 = 1;
-pub(crate) const CAP_LOW: u32 = 2;
-pub(crate) const CAP_HIGH: u32 = 3;
-pub(crate) const MISSED: u32 = 4;
+const SIDE_NEAR: u32 = 0;
+const SIDE_FAR: u32 = 1;
+const CAP_LOW: u32 = 2;
+const CAP_HIGH: u32 = 3;
+const MISSED: u32 = 4;
+
+/// Whether the candidate `part` lies on the side, whose u is the azimuth of its point.
+#[inline(always)]
+pub(crate) fn on_side(part: u32) -> bool {
+    part <= SIDE_FAR
+}
 
 /// What the test computes for a ray before it chooses: the slab −1 ≤ y ≤ 1 as an interval
 /// of t ([`slab`]), whose ends are the caps' distances, and the infinite cylinder's
@@ -104,8 +110,8 @@ impl Crossing {
     #[inline(always)]
     pub(crate) fn pick(&self, capped: bool, t_min: Real, t_max: Real) -> (Real, u32) {
         let (t0, t1) = self.t;
-        let on_side = |t: Real| (t > t_min) & (t < t_max) & (self.ty.0 <= t) & (t <= self.ty.1);
-        let (in0, in1) = (self.roots & on_side(t0), self.roots & on_side(t1));
+        let kept = |t: Real| (t > t_min) & (t < t_max) & (self.ty.0 <= t) & (t <= self.ty.1);
+        let (in0, in1) = (self.roots & kept(t0), self.roots & kept(t1));
         let (mut bound, mut part) = if in0 {
             (t0, SIDE_NEAR)
         } else if in1 {
@@ -154,26 +160,26 @@ impl Crossing {
             (-d.x, -d.z, self.a.sqrt())
         };
         let y = (o.y + t * d.y).clamp(-1.0, 1.0);
-        let on_side = part <= SIDE_FAR;
+        let side_hit = on_side(part);
         let cap_y: Real = if part == CAP_LOW { -1.0 } else { 1.0 };
         let at = o + d * t;
-        let p = if on_side {
+        let p = if side_hit {
             Vec3::new(x / r, y, z / r)
         } else {
             Vec3::new(at.x, cap_y, at.z)
         };
         let (g3, g4) = (gamma(3), gamma(4));
-        let g = if on_side {
+        let g = if side_hit {
             Vec3::new(g3, g4, g3)
         } else {
             Vec3::new(g4, 0.0, g4)
         };
-        let n = if on_side {
+        let n = if side_hit {
             Vec3::new(p.x, 0.0, p.z)
         } else {
             Vec3::new(0.0, cap_y, 0.0)
         };
-        let v = if on_side { p.y } else { p.z };
+        let v = if side_hit { p.y } else { p.z };
         (
             p,
             p.abs() * g,

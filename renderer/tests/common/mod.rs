@@ -47,6 +47,15 @@ impl SplitMix {
             }
         }
     }
+    /// A ray `(origin, direction)` aimed at a random point of the unit cylinder's rims
+    /// (radius 1 about y, y = ±1) from a random origin in [−4, 4)³: where the side's
+    /// computed point rounds across y = ±1 and a side root meets the slab's end.
+    pub fn toward_cylinder_rim(&mut self) -> (DVec3, DVec3) {
+        let turn = self.range(0.0, std::f64::consts::TAU);
+        let y = if self.chance(0.5) { 1.0 } else { -1.0 };
+        let o = self.vec(-4.0, 4.0);
+        (o, DVec3::new(turn.cos(), y, turn.sin()) - o)
+    }
     /// A uniform unit vector (from the ball, rejecting lengths below 1e-2).
     pub fn unit(&mut self) -> DVec3 {
         loop {
