@@ -10,9 +10,10 @@
 //! module reads nothing of the aggregate (whose module uses it): the aggregate hands it
 //! each instance's shape and maps as an [`Item`], and answers the tied rays itself. The
 //! tests are the scalar ones written lane by lane with the same operations in the same
-//! order (`shapes::flat`, `shapes::sphere`, `shapes::cube`, the transform's `inv_ray`, the
-//! lead's `object_ray`; the cylinder's is the scalar test itself, `shapes::cylinder`'s
-//! `Crossing`, written without branches and called lane by lane), so each lane computes the
+//! order (`shapes::flat`, `shapes::sphere`, the transform's `inv_ray`, the lead's
+//! `object_ray`; the cube's and the cylinder's are the scalar tests themselves,
+//! `shapes::cube`'s and `shapes::cylinder`'s `Crossing`, written without branches and called
+//! lane by lane), so each lane computes the
 //! bits the scalar test computes; so is the winner's record, built and mapped out of object
 //! space in lanes as the shape and the instance build and map it (`map_point_with_error`,
 //! `map_normal`), for each instance that some lane's ray hits first (the cylinder's
@@ -33,7 +34,7 @@ use crate::hit::Hit;
 use crate::ray::Ray;
 use crate::real::{gamma, Mat3, Real, Vec2, Vec3};
 use crate::shapes;
-use crate::shapes::cylinder::{self, Crossing};
+use crate::shapes::{cube, cylinder};
 
 /// The most instances an aggregate may hold to be searched in lanes: above it, the tree
 /// skips more tests than the lanes save.
@@ -195,33 +196,8 @@ impl SphereLines {
     }
 }
 
-/// `shapes::cube`'s `crossing` for lane `l`: the entry and exit distances over the slabs
-/// of the axes the ray is not parallel to, the axes they come from, and whether the ray
-/// is parallel to an axis and outside its slab (a miss).
-#[inline(always)]
-fn cube_crossing(r: &Rays, l: usize) -> (Real, Real, [usize; 2], bool) {
-    let (mut near, mut far) = (Real::NEG_INFINITY, Real::INFINITY);
-    let (mut near_axis, mut far_axis) = (0usize, 0usize);
-    let mut outside = false;
-    for k in 0..3 {
-        let (o, d) = (r.o[k][l], r.d[k][l]);
-        let parallel = d == 0.0;
-        outside |= parallel & !((-1.0 <= o) & (o <= 1.0));
-        let inv = 1.0 / d;
-        let (a, b) = ((-1.0 - o) * inv, (1.0 - o) * inv);
-        let (a, b) = if a > b { (b, a) } else { (a, b) };
-        let nearer = !parallel & (a > near);
-        let farther = !parallel & (b < far);
-        near = if nearer { a } else { near };
-        near_axis = if nearer { k } else { near_axis };
-        far = if farther { b } else { far };
-        far_axis = if farther { k } else { far_axis };
-    }
-    (near, far, [near_axis, far_axis], outside)
-}
-
 /// The distance of an item's candidate for each lane (`shapes::flat`, `shapes::sphere`'s
-/// `solve`, `shapes::cube`'s `crossing`, `shapes::cylinder`'s `Crossing`), or infinity
+/// `solve`, `shapes::cube`'s and `shapes::cylinder`'s `Crossing`), or infinity
 /// where it has none in `(t_min, t_max)`.
 #[inline(always)]
 fn distances(kind: Kind, r: &Rays, t_min: Real, t_max: &L) -> L {
@@ -247,21 +223,14 @@ fn distances(kind: Kind, r: &Rays, t_min: Real, t_max: &L) -> L {
         }
         Kind::Cube => {
             for l in 0..BATCH {
-                let (near, far, _, outside) = cube_crossing(r, l);
-                let in_near = (near > t_min) & (near < t_max[l]);
-                let in_far = (far > t_min) & (far < t_max[l]);
-                let first = if in_near { near } else { far };
-                t[l] = if !outside & !(near > far) & (in_near | in_far) {
-                    first
-                } else {
-                    Real::INFINITY
-                };
+                let (o, d) = r.lane(l);
+                t[l] = cube::Crossing::of(o, d).pick(t_min, t_max[l]).0;
             }
         }
         Kind::Cylinder { capped } => {
             for l in 0..BATCH {
                 let (o, d) = r.lane(l);
-                t[l] = Crossing::of(o, d).pick(capped, t_min, t_max[l]).0;
+                t[l] = cylinder::Crossing::of(o, d).pick(capped, t_min, t_max[l]).0;
             }
         }
         Kind::Rectangle | Kind::Disk | Kind::Plane => {
@@ -372,31 +341,23 @@ fn records(kind: Kind, r: &Rays, t_min: Real, t_max: &L, t: &L) -> Records {
             }
         }
         Kind::Cube => {
-            let g4 = gamma(4);
             for l in 0..BATCH {
-                // `crossing` again, for the axis and side of the face, then `intersect`.
-                let (near, _, [near_axis, far_axis], _) = cube_crossing(r, l);
-                let entering = (near > t_min) & (near < t_max[l]);
-                let axis = if entering { near_axis } else { far_axis };
-                let da = [r.d[0][l], r.d[1][l], r.d[2][l]][axis];
-                let side = if entering { -da.signum() } else { da.signum() };
-                let mut p = [0.0; 3];
-                for c in 0..3 {
-                    let at = r.o[c][l] + r.d[c][l] * t[l];
-                    p[c] = if c == axis { side } else { at };
-                    rec.p[c][l] = p[c];
-                    rec.err[c][l] = if c == axis { 0.0 } else { p[c].abs() * g4 };
-                    rec.n[c][l] = if c == axis { side } else { 0.0 };
+                // `pick` again, for whether the ray enters, then the record.
+                let (o, d) = r.lane(l);
+                let c = cube::Crossing::of(o, d);
+                let (_, entering) = c.pick(t_min, t_max[l]);
+                let (p, err, n, uv) = c.record(o, d, entering, t[l]);
+                for (field, v) in [(&mut rec.p, p), (&mut rec.err, err), (&mut rec.n, n)] {
+                    (field[0][l], field[1][l], field[2][l]) = (v.x, v.y, v.z);
                 }
-                rec.uv[0][l] = (p[(axis + 1) % 3] + 1.0) * 0.5;
-                rec.uv[1][l] = (p[(axis + 2) % 3] + 1.0) * 0.5;
+                (rec.uv[0][l], rec.uv[1][l]) = (uv.x, uv.y);
             }
         }
         Kind::Cylinder { capped } => {
             for l in 0..BATCH {
                 // `pick` again, for the candidate, then its record.
                 let (o, d) = r.lane(l);
-                let c = Crossing::of(o, d);
+                let c = cylinder::Crossing::of(o, d);
                 let (_, part) = c.pick(capped, t_min, t_max[l]);
                 let (p, err, n, uv) = c.record(o, d, part, t[l]);
                 for (field, v) in [(&mut rec.p, p), (&mut rec.err, err), (&mut rec.n, n)] {
