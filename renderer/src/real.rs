@@ -14,6 +14,12 @@ mod imp {
     pub type Vec2 = glam::Vec2;
     /// A 4-vector of `Real` (SIMD lanes: the four children of a BVH node).
     pub type Vec4 = glam::Vec4;
+    /// [`Vec3`] in a 16-byte SIMD register (glam's `Vec3A`): the same arithmetic on each
+    /// component, done for all three at once. For maps computed once and stored back as
+    /// [`Vec3`].
+    pub type Vec3A = glam::Vec3A;
+    /// [`Mat3`] with [`Vec3A`] columns.
+    pub type Mat3A = glam::Mat3A;
     /// Name of the precision, for reports.
     pub const PRECISION: &str = "f32";
 
@@ -36,6 +42,10 @@ mod imp {
     pub type Vec2 = glam::DVec2;
     /// A 4-vector of `Real` (SIMD lanes: the four children of a BVH node).
     pub type Vec4 = glam::DVec4;
+    /// [`Vec3`] itself: glam has no SIMD 3-vector of `f64`.
+    pub type Vec3A = glam::DVec3;
+    /// [`Mat3`] itself.
+    pub type Mat3A = glam::DMat3;
     /// Name of the precision, for reports.
     pub const PRECISION: &str = "f64";
 

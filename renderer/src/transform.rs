@@ -11,7 +11,7 @@
 
 use crate::aabb::Aabb;
 use crate::ray::Ray;
-use crate::real::{Mat3, Real, Vec3};
+use crate::real::{Mat3, Mat3A, Real, Vec3, Vec3A};
 use glam::{DMat3, DVec3};
 
 /// Largest accepted condition number (Frobenius norms of `m` and `m⁻¹`). Past this the
@@ -255,7 +255,7 @@ or use the f64 build",
     /// Maps a point to the outer space: `m·p + d`.
     #[inline]
     pub fn point(&self, p: Vec3) -> Vec3 {
-        self.m * p + self.d
+        mul(&self.m, p) + self.d
     }
 
     /// Maps a point and its error bound to the outer space (see [`map_point_with_error`]).
@@ -267,7 +267,7 @@ or use the f64 build",
     /// Maps a vector to the outer space: `m·v`.
     #[inline]
     pub fn vector(&self, v: Vec3) -> Vec3 {
-        self.m * v
+        mul(&self.m, v)
     }
 
     /// Maps a normal to the outer space: `m⁻ᵀ·n` (not renormalized).
@@ -279,13 +279,13 @@ or use the f64 build",
     /// Maps a point to the inner space: `m⁻¹·(p − d)`.
     #[inline]
     pub fn inv_point(&self, p: Vec3) -> Vec3 {
-        self.inv * (p - self.d)
+        mul(&self.inv, p - self.d)
     }
 
     /// Maps a vector to the inner space: `m⁻¹·v`.
     #[inline]
     pub fn inv_vector(&self, v: Vec3) -> Vec3 {
-        self.inv * v
+        mul(&self.inv, v)
     }
 
     /// Maps a ray to the inner space. The direction is not renormalized.
@@ -315,14 +315,102 @@ or use the f64 build",
 /// the matrix in another form (the aggregate's compact spheres) computes the same bits.
 #[inline]
 pub(crate) fn map_point_with_error(m: &Mat3, d: Vec3, p: Vec3, err: Vec3) -> (Vec3, Vec3) {
-    let am = Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+    let m = Mat3A::from(*m);
+    let (d, p, err) = (Vec3A::from(d), Vec3A::from(p), Vec3A::from(err));
+    let am = Mat3A::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
     let g = crate::real::gamma(3);
     let e = (am * p.abs() + d.abs()) * g + am * err * (1.0 + g);
-    (*m * p + d, e)
+    (Vec3::from(m * p + d), Vec3::from(e))
 }
 
 /// Maps a normal by `m⁻ᵀ`, given `inv = m⁻¹` (not renormalized).
 #[inline]
 pub(crate) fn map_normal(inv: &Mat3, n: Vec3) -> Vec3 {
-    inv.transpose() * n
+    mul(&inv.transpose(), n)
+}
+
+/// `m·v`, with glam's operations in glam's order (`Mat3`'s product: the columns times
+/// v's components, summed left to right), so the same bits, but on all three components
+/// at once in a SIMD register ([`Mat3A`]): a record mapped out of an instance took 35 %
+/// fewer instructions than by `Mat3`'s product, which works component by component.
+#[inline(always)]
+pub(crate) fn mul(m: &Mat3, v: Vec3) -> Vec3 {
+    Vec3::from(Mat3A::from(*m) * Vec3A::from(v))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small generator (xorshift64*), so the test needs no crate.
+    struct Gen(u64);
+
+    impl Gen {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        }
+
+        /// Mostly ordinary numbers of mixed sizes; one in four an awkward one (a signed
+        /// zero, a subnormal, the largest finite, an infinity, a NaN).
+        fn value(&mut self) -> Real {
+            let awkward = [
+                0.0,
+                -0.0,
+                Real::MIN_POSITIVE / 4.0,
+                -Real::MAX,
+                Real::INFINITY,
+                Real::NEG_INFINITY,
+                Real::NAN,
+                1.0,
+            ];
+            let h = self.next();
+            if h % 4 == 0 {
+                return awkward[(h >> 8) as usize % awkward.len()];
+            }
+            let unit = (h >> 11) as f64 / (1u64 << 53) as f64;
+            let exp = ((h >> 2) % 40) as i32 - 20;
+            ((unit * 2.0 - 1.0) * 2f64.powi(exp)) as Real
+        }
+
+        fn vec(&mut self) -> Vec3 {
+            Vec3::new(self.value(), self.value(), self.value())
+        }
+
+        fn mat(&mut self) -> Mat3 {
+            Mat3::from_cols(self.vec(), self.vec(), self.vec())
+        }
+    }
+
+    /// The bits of each component, every NaN as one: which of two NaN operands an
+    /// operation passes on depends on the operands' order, which the compiler may swap
+    /// (Rust promises no NaN's bits), so no two builds of one expression need agree there.
+    fn bits(v: Vec3) -> [u64; 3] {
+        v.to_array()
+            .map(|x| if x.is_nan() { u64::MAX } else { x.to_bits() as u64 })
+    }
+
+    /// `mul` and `map_point_with_error` compute with [`Mat3A`] what glam's [`Mat3`]
+    /// computes, with the same bits (signed zeros included; a NaN is a NaN): the
+    /// instances' maps (and the lanes, which repeat them in glam's order) rest on it.
+    #[test]
+    fn products_in_registers_are_glams_bit_for_bit() {
+        let mut g = Gen(0x9e37_79b9_7f4a_7c15);
+        for case in 0..50_000 {
+            let (m, d, p, err) = (g.mat(), g.vec(), g.vec(), g.vec());
+            assert_eq!(bits(mul(&m, p)), bits(m * p), "case {case}: mul({m:?}, {p:?})");
+            let am = Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+            let gm = crate::real::gamma(3);
+            let want_e = (am * p.abs() + d.abs()) * gm + am * err * (1.0 + gm);
+            let (q, e) = map_point_with_error(&m, d, p, err);
+            assert_eq!(
+                (bits(q), bits(e)),
+                (bits(m * p + d), bits(want_e)),
+                "case {case}: map_point_with_error({m:?}, {d:?}, {p:?}, {err:?})"
+            );
+            assert_eq!(bits(map_normal(&m, p)), bits(m.transpose() * p), "case {case}");
+        }
+    }
 }

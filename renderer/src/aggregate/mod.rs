@@ -19,7 +19,7 @@ use crate::ray::Ray;
 use crate::real::{Mat3, Real, Vec3};
 use crate::shapes::anchored::{self, Anchored};
 use crate::shapes::{self, Mesh, Triangle};
-use crate::transform::{map_normal, map_point_with_error, Transform};
+use crate::transform::{map_normal, map_point_with_error, mul, Transform};
 use std::sync::Arc;
 
 mod lanes;
@@ -410,7 +410,7 @@ impl Lead {
     #[inline]
     fn object_ray(&self, ray: &Ray) -> Ray {
         let m = Mat3::from_diagonal(Vec3::splat(self.s));
-        Ray::new(m * (ray.o - self.c), m * ray.d)
+        Ray::new(mul(&m, ray.o - self.c), mul(&m, ray.d))
     }
 
     /// [`Instance::finish`] for the instance this lead stands for.
