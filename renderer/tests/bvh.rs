@@ -1279,7 +1279,8 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
     let mut hits = 0;
     let mut scenes_in_lanes = 0;
     for scene in 0..300 {
-        let n = 1 + rng.below(8);
+        // Up to 16 instances, the most the lanes take (`lanes::MAX_INSTANCES`).
+        let n = 1 + rng.below(16);
         let extent = 2.0 + 2.0 * (n as f64).cbrt();
         let mut instances: Vec<Instance> = (0..n)
             .map(|i| {

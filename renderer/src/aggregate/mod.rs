@@ -520,6 +520,7 @@ impl Aggregate {
                 Some(lanes::Item::new(
                     kind?,
                     xf,
+                    &inst.bounds(),
                     inst.material,
                     inst.object_id,
                     self.surface_offset(k),
