@@ -419,7 +419,10 @@ impl<'a> PhysicalIntegrator<'a> {
     ) -> glam::DVec3 {
         let mut l = glam::DVec3::ZERO;
         let mut beta = glam::DVec3::ONE;
-        let mut ray = *ray;
+        // The current ray's origin and direction, kept apart: a copy of the whole `Ray`
+        // (24 bytes, moved as 16 + 8) read back as its direction (12 bytes from offset 12)
+        // spans both moves, which the processor cannot forward from its store buffer.
+        let (mut origin, mut d) = (ray.o, ray.d);
         let mut prev_pdf = 0.0; // 0: the previous vertex was the camera or a delta lobe.
         let mut eta_scale = 1.0;
         let mut depth = 0u32;
@@ -431,7 +434,7 @@ impl<'a> PhysicalIntegrator<'a> {
         // The camera ray's hit is given; each vertex finds the next one's.
         let mut found = first;
         loop {
-            let dir = dv(ray.d).normalize();
+            let dir = dv(d).normalize();
             let Some(hit) = found else {
                 if let Some(env) = self.env {
                     let w = if prev_pdf > 0.0 {
@@ -447,9 +450,9 @@ impl<'a> PhysicalIntegrator<'a> {
             let wo = -dir;
             let le = self.emitted(&s, wo);
             if le != glam::DVec3::ZERO {
-                let dist = (dv(hit.p) - dv(ray.o)).length();
+                let dist = (dv(hit.p) - dv(origin)).length();
                 let w = if prev_pdf > 0.0 {
-                    mis(prev_pdf, self.light_pdf_at(&s, dv(ray.o), dir, dist))
+                    mis(prev_pdf, self.light_pdf_at(&s, dv(origin), dir, dist))
                 } else if LIGHT
                     && caustic
                     && self.fault != Some(Fault::CausticsTwice)
@@ -521,8 +524,8 @@ impl<'a> PhysicalIntegrator<'a> {
             if beta == glam::DVec3::ZERO {
                 break;
             }
-            let t_min;
-            (ray, t_min) = self.spawn.ray(s.p, s.err, rv(s.ng), rv(bs.dir));
+            let (ray, t_min) = self.spawn.ray(s.p, s.err, rv(s.ng), rv(bs.dir));
+            (origin, d) = (ray.o, ray.d);
             found = self
                 .scene
                 .root
