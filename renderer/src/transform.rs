@@ -388,8 +388,13 @@ mod tests {
     /// operation passes on depends on the operands' order, which the compiler may swap
     /// (Rust promises no NaN's bits), so no two builds of one expression need agree there.
     fn bits(v: Vec3) -> [u64; 3] {
-        v.to_array()
-            .map(|x| if x.is_nan() { u64::MAX } else { x.to_bits() as u64 })
+        v.to_array().map(|x| {
+            if x.is_nan() {
+                u64::MAX
+            } else {
+                x.to_bits() as u64
+            }
+        })
     }
 
     /// `mul` and `map_point_with_error` compute with [`Mat3A`] what glam's [`Mat3`]
@@ -400,7 +405,11 @@ mod tests {
         let mut g = Gen(0x9e37_79b9_7f4a_7c15);
         for case in 0..50_000 {
             let (m, d, p, err) = (g.mat(), g.vec(), g.vec(), g.vec());
-            assert_eq!(bits(mul(&m, p)), bits(m * p), "case {case}: mul({m:?}, {p:?})");
+            assert_eq!(
+                bits(mul(&m, p)),
+                bits(m * p),
+                "case {case}: mul({m:?}, {p:?})"
+            );
             let am = Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
             let gm = crate::real::gamma(3);
             let want_e = (am * p.abs() + d.abs()) * gm + am * err * (1.0 + gm);
@@ -410,7 +419,11 @@ mod tests {
                 (bits(m * p + d), bits(want_e)),
                 "case {case}: map_point_with_error({m:?}, {d:?}, {p:?}, {err:?})"
             );
-            assert_eq!(bits(map_normal(&m, p)), bits(m.transpose() * p), "case {case}");
+            assert_eq!(
+                bits(map_normal(&m, p)),
+                bits(m.transpose() * p),
+                "case {case}"
+            );
         }
     }
 }

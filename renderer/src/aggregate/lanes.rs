@@ -74,13 +74,14 @@ pub(super) struct Item {
 }
 
 /// A box that holds every hit an instance's own test can report, for the skip in
-/// [`search`]: the instance's world bounds widened by `pad`, and by `per_origin` times
-/// the largest coordinate of a batch's ray origins. Every error between the ray an
-/// instance's test sees and the world ray (the ray taken into object space, the shape's
-/// rounded hit point, the bounds' own rounding) is a few units in the last place of
-/// those magnitudes, times the condition number κ = ‖m‖·‖m⁻¹‖ of its map; the
-/// widening is [`REACH_ULPS`] of them times κ, and the box test that uses it rounds by
-/// less still. So a batch none of whose rays meets the box has no hit on the instance.
+/// [`search`]: the instance's world bounds (`lo`, `hi`) widened by `per_origin` times
+/// their own size, and, for each batch, by `per_origin` times the largest coordinate of
+/// its rays' origins. Every error between the ray an instance's test sees and the world
+/// ray (the ray taken into object space, the shape's rounded hit point, the bounds' own
+/// rounding) is a few units in the last place of those magnitudes, times the condition
+/// number κ = ‖m‖·‖m⁻¹‖ of its map; `per_origin` is [`REACH_ULPS`] units in the last
+/// place times κ, and the box test that uses it rounds by less still. So a batch none of
+/// whose rays meets the box has no hit on the instance.
 #[derive(Clone, Copy, Debug)]
 struct Reach {
     lo: Vec3,
@@ -138,8 +139,24 @@ impl Reach {
                 let (a, b) = if t0 > t1 { (t1, t0) } else { (t0, t1) };
                 let inside = (lo[c] <= o) & (o <= hi[c]);
                 let parallel = d == 0.0;
-                let a = if parallel { if inside { Real::NEG_INFINITY } else { Real::INFINITY } } else { a };
-                let b = if parallel { if inside { Real::INFINITY } else { Real::NEG_INFINITY } } else { b };
+                let a = if parallel {
+                    if inside {
+                        Real::NEG_INFINITY
+                    } else {
+                        Real::INFINITY
+                    }
+                } else {
+                    a
+                };
+                let b = if parallel {
+                    if inside {
+                        Real::INFINITY
+                    } else {
+                        Real::NEG_INFINITY
+                    }
+                } else {
+                    b
+                };
                 near = if a > near { a } else { near };
                 far = if b < far { b } else { far };
             }
@@ -363,7 +380,9 @@ fn winners(items: &[Item], lanes: &Rays, t_min: Real, bound: &L) -> ([u32; BATCH
             *m = if o.abs() > *m { o.abs() } else { *m };
         }
     }
-    let omag = lane_max.iter().fold(0.0, |m: Real, &x| if x > m { x } else { m });
+    let omag = lane_max
+        .iter()
+        .fold(0.0, |m: Real, &x| if x > m { x } else { m });
     for (k, item) in items.iter().enumerate() {
         // An item whose box no ray meets has no hit to offer (`Reach`).
         if item.reach.is_some_and(|r| !r.met(lanes, omag, bound)) {
@@ -800,7 +819,12 @@ mod tests {
             state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
             to_unit(mix64(state))
         };
-        let kinds = [Kind::Sphere, Kind::Cube, Kind::Cylinder { capped: true }, Kind::Cylinder { capped: false }];
+        let kinds = [
+            Kind::Sphere,
+            Kind::Cube,
+            Kind::Cylinder { capped: true },
+            Kind::Cylinder { capped: false },
+        ];
         let (mut hits, mut skipped, mut away_skipped, mut away) = (0, 0, 0, 0);
         for case in 0..3000 {
             let kind = kinds[(case / 4) % 4];
@@ -809,9 +833,13 @@ mod tests {
                 10f64.powf(4.0 * u() - 2.0),
                 10f64.powf(4.0 * u() - 2.0),
             );
-            let m = rotation([u(), u(), u()]) * glam::DMat3::from_diagonal(scale) * rotation([u(), u(), u()]);
+            let m = rotation([u(), u(), u()])
+                * glam::DMat3::from_diagonal(scale)
+                * rotation([u(), u(), u()]);
             let d = (glam::DVec3::new(u(), u(), u()) * 2.0 - 1.0) * 10f64.powf(3.0 * u());
-            let Ok(x) = Transform::new(&Affine64 { m, d }) else { continue };
+            let Ok(x) = Transform::new(&Affine64 { m, d }) else {
+                continue;
+            };
             let xf = Some((x.inverse_matrix(), x.matrix(), x.translation()));
             let unit = Aabb::from_points(Vec3::splat(-1.0), Vec3::ONE);
             let b = x.bounds(&unit);
@@ -826,18 +854,24 @@ mod tests {
             // well away from it.
             let aimed = case % 2 == 0;
             let dist = size * 10f64.powf(5.0 * u() - 0.3);
-            let from = centre + (glam::DVec3::new(u(), u(), u()) * 2.0 - 1.0).normalize_or(glam::DVec3::X) * dist;
+            let from = centre
+                + (glam::DVec3::new(u(), u(), u()) * 2.0 - 1.0).normalize_or(glam::DVec3::X) * dist;
             // A batch of one ray (repeated in every lane) in a third of the cases: the
             // batch misses the box as often as the ray does.
             let n = if case % 3 == 1 { 1 } else { BATCH };
             let rays: Vec<Ray> = (0..n)
                 .map(|_| {
-                    let o = if u() < 0.8 { from } else { centre + (glam::DVec3::new(u(), u(), u()) * 2.0 - 1.0) * dist };
+                    let o = if u() < 0.8 {
+                        from
+                    } else {
+                        centre + (glam::DVec3::new(u(), u(), u()) * 2.0 - 1.0) * dist
+                    };
                     let on_shape = case % 4 < 2;
                     let target = if aimed && on_shape {
                         // A point of the unit sphere in object space (on the sphere, in
                         // the cube and about the cylinder), placed.
-                        let p = (glam::DVec3::new(u(), u(), u()) * 2.0 - 1.0).normalize_or(glam::DVec3::X);
+                        let p = (glam::DVec3::new(u(), u(), u()) * 2.0 - 1.0)
+                            .normalize_or(glam::DVec3::X);
                         m * p + d
                     } else if aimed {
                         // A point of the box's surface: each coordinate at an end or
@@ -857,9 +891,16 @@ mod tests {
                         );
                         // Pushed out of the box by 1 to 10⁵ units in the last place.
                         let out = (p - centre).normalize_or(glam::DVec3::X);
-                        p + out * (Real::EPSILON as f64 * 10f64.powf(5.0 * u()) * (size + p.abs().max_element()))
+                        p + out
+                            * (Real::EPSILON as f64
+                                * 10f64.powf(5.0 * u())
+                                * (size + p.abs().max_element()))
                     } else {
-                        centre + (glam::DVec3::new(u(), u(), u()) * 2.0 - 1.0).normalize_or(glam::DVec3::Y) * size * 50.0
+                        centre
+                            + (glam::DVec3::new(u(), u(), u()) * 2.0 - 1.0)
+                                .normalize_or(glam::DVec3::Y)
+                                * size
+                                * 50.0
                     };
                     Ray::new(crate::real::vec3(o), crate::real::vec3(target - o))
                 })
@@ -875,7 +916,11 @@ mod tests {
             let t = distances(kind, &lanes.mapped(&item.xf), t_min, &bound);
             let lanes_hit = t.iter().filter(|t| **t < Real::INFINITY).count();
             hits += lanes_hit;
-            let omag = lanes.o.iter().flatten().fold(0.0, |m: Real, x| m.max(x.abs()));
+            let omag = lanes
+                .o
+                .iter()
+                .flatten()
+                .fold(0.0, |m: Real, x| m.max(x.abs()));
             let met = reach.met(&lanes, omag, &bound);
             assert!(
                 met || lanes_hit == 0,

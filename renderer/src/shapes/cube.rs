@@ -88,8 +88,18 @@ impl Crossing {
     /// coordinates in the axes' cyclic order, each mapped to [0, 1]. The face's
     /// coordinate is chosen by selects, not read from memory by index.
     #[inline(always)]
-    pub(crate) fn record(&self, o: Vec3, d: Vec3, entering: bool, t: Real) -> (Vec3, Vec3, Vec3, Vec2) {
-        let axis = if entering { self.near_axis } else { self.far_axis };
+    pub(crate) fn record(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        entering: bool,
+        t: Real,
+    ) -> (Vec3, Vec3, Vec3, Vec2) {
+        let axis = if entering {
+            self.near_axis
+        } else {
+            self.far_axis
+        };
         let on = [axis == 0, axis == 1, axis == 2];
         let da = if on[0] {
             d.x
