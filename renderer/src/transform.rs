@@ -330,9 +330,10 @@ pub(crate) fn map_normal(inv: &Mat3, n: Vec3) -> Vec3 {
 }
 
 /// `m·v`, with glam's operations in glam's order (`Mat3`'s product: the columns times
-/// v's components, summed left to right), so the same bits, but on all three components
-/// at once in a SIMD register ([`Mat3A`]): a record mapped out of an instance took 35 %
-/// fewer instructions than by `Mat3`'s product, which works component by component.
+/// v's components, summed left to right), so the same bits, but in the `f32` build on all
+/// three components at once in a SIMD register ([`Mat3A`]): a record mapped out of an
+/// instance took 35 % fewer instructions than by `Mat3`'s product, which works component
+/// by component (the time about the same: renderer/docs/performance.md).
 #[inline(always)]
 pub(crate) fn mul(m: &Mat3, v: Vec3) -> Vec3 {
     Vec3::from(Mat3A::from(*m) * Vec3A::from(v))

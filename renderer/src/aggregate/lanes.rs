@@ -121,14 +121,16 @@ impl Reach {
     }
 
     /// Whether some lane's ray may meet the box (widened by `per_origin` times `omag`,
-    /// the batch's largest origin coordinate) at a distance in `[0, bound]`: the slab
-    /// test, where a NaN never rules a ray out (an axis with a NaN is left out of the
-    /// interval, a comparison with one fails) and a ray parallel to a slab meets it
-    /// everywhere or nowhere.
+    /// the batch's largest origin coordinate) at a distance in `[min(t_min, 0), bound]`:
+    /// the slab test, in which a NaN never rules a ray out (an axis whose distances hold
+    /// a NaN, as a direction of a subnormal component from a point on a face gives, is
+    /// left out of the interval) and a ray parallel to a slab meets it everywhere or
+    /// nowhere.
     #[inline(always)]
-    fn met(&self, r: &Rays, omag: Real, bound: &L) -> bool {
+    fn met(&self, r: &Rays, omag: Real, t_min: Real, bound: &L) -> bool {
         let widen = Vec3::splat(omag * self.per_origin);
         let (lo, hi) = (self.lo - widen, self.hi + widen);
+        let start = t_min.min(0.0);
         let mut any = false;
         for l in 0..BATCH {
             let (mut near, mut far) = (Real::NEG_INFINITY, Real::INFINITY);
@@ -138,29 +140,31 @@ impl Reach {
                 let (t0, t1) = ((lo[c] - o) * inv, (hi[c] - o) * inv);
                 let (a, b) = if t0 > t1 { (t1, t0) } else { (t0, t1) };
                 let inside = (lo[c] <= o) & (o <= hi[c]);
-                let parallel = d == 0.0;
-                let a = if parallel {
-                    if inside {
-                        Real::NEG_INFINITY
-                    } else {
-                        Real::INFINITY
-                    }
+                // Everything or nothing for a ray parallel to the slab. And everything when
+                // the exit is a NaN (0·∞: from a point on the widened face, with a
+                // reciprocal that overflowed), for then the pair is not swapped and the
+                // entry is the other distance, an infinity that says nothing. (A NaN entry
+                // is passed over by the comparisons below.)
+                let all = (d == 0.0) & inside | t1.is_nan();
+                let none = (d == 0.0) & !inside;
+                let a = if all {
+                    Real::NEG_INFINITY
+                } else if none {
+                    Real::INFINITY
                 } else {
                     a
                 };
-                let b = if parallel {
-                    if inside {
-                        Real::INFINITY
-                    } else {
-                        Real::NEG_INFINITY
-                    }
+                let b = if all {
+                    Real::INFINITY
+                } else if none {
+                    Real::NEG_INFINITY
                 } else {
                     b
                 };
                 near = if a > near { a } else { near };
                 far = if b < far { b } else { far };
             }
-            any |= !((near > far) | (far < 0.0) | (near > bound[l]));
+            any |= !((near > far) | (far < start) | (near > bound[l]));
         }
         any
     }
@@ -216,6 +220,21 @@ impl Rays {
             Vec3::new(o[0][l], o[1][l], o[2][l]),
             Vec3::new(d[0][l], d[1][l], d[2][l]),
         )
+    }
+
+    /// The largest magnitude of the origins' coordinates, for the items' reach (by
+    /// selects, which vectorize; a NaN is passed over).
+    #[inline(always)]
+    fn largest_origin(&self) -> Real {
+        let mut lane_max = [0.0; BATCH];
+        for c in 0..3 {
+            for (m, o) in lane_max.iter_mut().zip(&self.o[c]) {
+                *m = if o.abs() > *m { o.abs() } else { *m };
+            }
+        }
+        lane_max
+            .iter()
+            .fold(0.0, |m: Real, &x| if x > m { x } else { m })
     }
 
     /// `rays` (at most `BATCH`) as lanes; the lanes past the last ray repeat it.
@@ -372,20 +391,13 @@ const TIE: u32 = u32::MAX - 1;
 fn winners(items: &[Item], lanes: &Rays, t_min: Real, bound: &L) -> ([u32; BATCH], L) {
     let mut best_t = [Real::INFINITY; BATCH];
     let mut best = [NONE; BATCH];
-    // The batch's largest origin coordinate, for the items' reach (by selects, which
-    // vectorize; a NaN is passed over).
-    let mut lane_max = [0.0; BATCH];
-    for c in 0..3 {
-        for (m, o) in lane_max.iter_mut().zip(&lanes.o[c]) {
-            *m = if o.abs() > *m { o.abs() } else { *m };
-        }
-    }
-    let omag = lane_max
-        .iter()
-        .fold(0.0, |m: Real, &x| if x > m { x } else { m });
+    let omag = lanes.largest_origin();
     for (k, item) in items.iter().enumerate() {
         // An item whose box no ray meets has no hit to offer (`Reach`).
-        if item.reach.is_some_and(|r| !r.met(lanes, omag, bound)) {
+        if item
+            .reach
+            .is_some_and(|r| !r.met(lanes, omag, t_min, bound))
+        {
             continue;
         }
         let t = distances(item.kind, &lanes.mapped(&item.xf), t_min, bound);
@@ -424,6 +436,16 @@ impl Records {
         uv: [[0.0; BATCH]; 2],
         side: [false; BATCH],
     };
+
+    /// Lane `l`'s point, error bound, normal and uv, as a shape's `Crossing::record`
+    /// gives them.
+    #[inline(always)]
+    fn put(&mut self, l: usize, (p, err, n, uv): (Vec3, Vec3, Vec3, Vec2)) {
+        for (field, v) in [(&mut self.p, p), (&mut self.err, err), (&mut self.n, n)] {
+            (field[0][l], field[1][l], field[2][l]) = (v.x, v.y, v.z);
+        }
+        (self.uv[0][l], self.uv[1][l]) = (uv.x, uv.y);
+    }
 }
 
 /// Each lane's candidate record of a `kind` at the distance `t` it found (`r` in object
@@ -469,11 +491,7 @@ fn records(kind: Kind, r: &Rays, t_min: Real, t_max: &L, t: &L) -> Records {
                 let (o, d) = r.lane(l);
                 let c = cube::Crossing::of(o, d);
                 let (_, entering) = c.pick(t_min, t_max[l]);
-                let (p, err, n, uv) = c.record(o, d, entering, t[l]);
-                for (field, v) in [(&mut rec.p, p), (&mut rec.err, err), (&mut rec.n, n)] {
-                    (field[0][l], field[1][l], field[2][l]) = (v.x, v.y, v.z);
-                }
-                (rec.uv[0][l], rec.uv[1][l]) = (uv.x, uv.y);
+                rec.put(l, c.record(o, d, entering, t[l]));
             }
         }
         Kind::Cylinder { capped } => {
@@ -482,11 +500,7 @@ fn records(kind: Kind, r: &Rays, t_min: Real, t_max: &L, t: &L) -> Records {
                 let (o, d) = r.lane(l);
                 let c = cylinder::Crossing::of(o, d);
                 let (_, part) = c.pick(capped, t_min, t_max[l]);
-                let (p, err, n, uv) = c.record(o, d, part, t[l]);
-                for (field, v) in [(&mut rec.p, p), (&mut rec.err, err), (&mut rec.n, n)] {
-                    (field[0][l], field[1][l], field[2][l]) = (v.x, v.y, v.z);
-                }
-                (rec.uv[0][l], rec.uv[1][l]) = (uv.x, uv.y);
+                rec.put(l, c.record(o, d, part, t[l]));
                 rec.side[l] = cylinder::on_side(part);
             }
         }
@@ -600,7 +614,9 @@ fn search<const UV: bool>(
     out: &mut [Option<Hit>],
 ) -> u64 {
     let lanes = Rays::of(rays);
-    let mut bound = [Real::INFINITY; BATCH];
+    // The lanes past the last ray repeat it, its bound included (so that they do not
+    // keep an instance it cannot reach from being passed over).
+    let mut bound = [t_max[t_max.len() - 1]; BATCH];
     bound[..t_max.len()].copy_from_slice(t_max);
     let (best, best_t) = winners(items, &lanes, t_min, &bound);
     // Each winning instance's records, for the lanes it won.
@@ -804,13 +820,15 @@ mod tests {
 
     /// The skip of [`search`] never passes over an item that some ray of the batch hits:
     /// spheres, cubes and cylinders under rotations and scales of condition number up to
-    /// 10⁴, up to 10³ from the origin, and batches of rays from near and far (up to 10⁵
-    /// times the item's size) aimed at points on and just around the item's bounds (its
-    /// corners, edges and faces, where a ray grazes it), with and without an interval's
-    /// end. And it does pass over most batches aimed elsewhere (some of whose origins lie
-    /// about the item: 58 % with this seed). (The widening is a margin this test does not
-    /// measure: without it, no exact test here hits a ray that the box test rules out.
-    /// It stands for the error bounds in [`Reach`], which no test can make tight.)
+    /// 10⁴, up to 10³ from the origin, and batches of rays (of one ray, repeated in every
+    /// lane, or sixteen) from near and far (up to 5·10⁴ times the item's size) aimed at
+    /// the placed shape, or with every ray just past the item's box (its corners, edges
+    /// and faces, by 1 to 10⁵ units in the last place, where a ray grazes it), with and
+    /// without an interval's end. And it does pass over more than half of the batches
+    /// aimed elsewhere (some of whose origins lie about the item). (The widening is a
+    /// margin this test does not measure: without it, no exact test here hits a ray that
+    /// the box test rules out. It stands for the error bounds in [`Reach`], which no test
+    /// can make tight. `reach_keeps_nan_parallel_and_backward_rays` has the edge cases.)
     #[test]
     fn reach_rules_out_only_batches_that_miss() {
         use crate::transform::{Affine64, Transform};
@@ -916,12 +934,7 @@ mod tests {
             let t = distances(kind, &lanes.mapped(&item.xf), t_min, &bound);
             let lanes_hit = t.iter().filter(|t| **t < Real::INFINITY).count();
             hits += lanes_hit;
-            let omag = lanes
-                .o
-                .iter()
-                .flatten()
-                .fold(0.0, |m: Real, x| m.max(x.abs()));
-            let met = reach.met(&lanes, omag, &bound);
+            let met = reach.met(&lanes, lanes.largest_origin(), t_min, &bound);
             assert!(
                 met || lanes_hit == 0,
                 "case {case}: the reach (aggregate/lanes.rs Reach) rules out a batch of which \
@@ -939,5 +952,88 @@ mod tests {
             "the reach ruled out only {away_skipped} of {away} batches aimed away from the item"
         );
         assert!(skipped > 0);
+    }
+
+    /// The reach's edge cases, each a ray that an item's own test hits and that the
+    /// reach must keep: a ray from a point exactly on the widened box's face with a
+    /// subnormal direction component (whose reciprocal overflows, so that one of the
+    /// face's distances is 0·∞, a NaN), rays parallel to a slab and inside it, and an
+    /// interval that starts behind the origin (`intersect_many` takes any `t_min`).
+    #[test]
+    fn reach_keeps_nan_parallel_and_backward_rays() {
+        use crate::transform::{Affine64, Transform};
+        let placed = |kind: Kind, scale: f64, at: glam::DVec3| {
+            let x = Transform::new(&Affine64 {
+                m: glam::DMat3::from_diagonal(glam::DVec3::splat(scale)),
+                d: at,
+            })
+            .unwrap();
+            let unit = Aabb::from_points(Vec3::splat(-1.0), Vec3::ONE);
+            let xf = Some((x.inverse_matrix(), x.matrix(), x.translation()));
+            Item::new(kind, xf, &x.bounds(&unit), 0, 1, 0)
+        };
+        let hit_and_met = |item: &Item, ray: Ray, t_min: Real| {
+            let lanes = Rays::of(&[ray]);
+            let bound = [Real::INFINITY; BATCH];
+            let t = distances(item.kind, &lanes.mapped(&item.xf), t_min, &bound)[0];
+            let reach = item.reach.unwrap();
+            (
+                t < Real::INFINITY,
+                reach.met(&lanes, lanes.largest_origin(), t_min, &bound),
+            )
+        };
+        // A cube of half-size 0.01 at the origin; a ray from a point exactly on its
+        // widened +x face, and one from its −x face (the origin's own coordinate widens
+        // it: found by stepping out from the face), back towards it at a subnormal speed,
+        // parallel to y.
+        let cube = placed(Kind::Cube, 0.01, glam::DVec3::ZERO);
+        let reach = cube.reach.unwrap();
+        // Each face: its side, and the point's step outward from the unwidened face.
+        for (side, face) in [(1.0, reach.hi.x), (-1.0, reach.lo.x)] {
+            let mut x = face;
+            let on_face = (0..100_000).find_map(|_| {
+                x = if side > 0.0 {
+                    x.next_up()
+                } else {
+                    x.next_down()
+                };
+                (face + side * (x.abs() * reach.per_origin) == x).then_some(x)
+            });
+            let x = on_face.expect("a point exactly on the widened face");
+            // (Its z, small but not subnormal, gives the interval a finite end, far
+            // beyond the hit, which a +∞ entry from the NaN'd axis would pass.)
+            let d = Vec3::new(
+                -side * Real::MIN_POSITIVE / 4.0,
+                0.0,
+                Real::MIN_POSITIVE * 16.0,
+            );
+            let slow = Ray::new(Vec3::new(x, 0.0, 0.0), d);
+            assert_eq!(
+                hit_and_met(&cube, slow, 0.0),
+                (true, true),
+                "aggregate/lanes.rs Reach::met: a ray from the widened face at a subnormal \
+                 speed, whose slab distances are ∞ and 0·∞ (a NaN), hits the cube ({slow:?})"
+            );
+        }
+        // Parallel to two axes, inside their slabs, through a sphere and a cylinder.
+        for kind in [Kind::Sphere, Kind::Cylinder { capped: true }] {
+            let item = placed(kind, 0.5, glam::DVec3::new(3.0, 0.0, 0.0));
+            let ray = Ray::new(Vec3::new(0.0, 0.1, 0.0), Vec3::X);
+            assert_eq!(
+                hit_and_met(&item, ray, 0.0),
+                (true, true),
+                "{kind:?}, parallel: {ray:?}"
+            );
+        }
+        // Behind the origin, found from t_min = −10.
+        let behind = placed(Kind::Sphere, 0.5, glam::DVec3::new(-5.0, 0.0, 0.0));
+        let ray = Ray::new(Vec3::ZERO, Vec3::X);
+        assert_eq!(
+            hit_and_met(&behind, ray, -10.0),
+            (true, true),
+            "aggregate/lanes.rs Reach::met: a sphere behind the origin, with t_min = −10"
+        );
+        // And the same sphere from t_min = 0: neither.
+        assert_eq!(hit_and_met(&behind, ray, 0.0), (false, false));
     }
 }
