@@ -319,3 +319,38 @@ fn seams_apexes_edges_and_corners_hit() {
         assert!(seam.worst <= 16.0, "{seam:?}");
     }
 }
+
+/// A ray that enters (or leaves) the cube through an edge or a corner crosses two or
+/// three slabs at exactly the same distance; the record is then the first axis's face,
+/// x before y before z (shapes/cube.rs `Crossing`: "the first axis on a tie"), for the
+/// entry and, from inside, for the exit.
+#[test]
+fn cube_edge_ties_take_the_first_axis() {
+    let cube = Shape::Cube;
+    let cases: [([f32; 3], [f32; 3], [f32; 3]); 6] = [
+        // Entering through the edge x = y = −1, the corner, and the edge y = z = −1.
+        ([-2.0, -2.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 0.0, 0.0]),
+        ([-2.0, -2.0, -2.0], [1.0, 1.0, 1.0], [-1.0, 0.0, 0.0]),
+        ([0.0, -2.0, -2.0], [0.0, 1.0, 1.0], [0.0, -1.0, 0.0]),
+        // Leaving from the centre through the edge x = y = 1, the corner, the edge y = z = 1.
+        ([0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 0.0, 0.0]),
+        ([0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [1.0, 0.0, 0.0]),
+        ([0.0, 0.0, 0.0], [0.0, 1.0, 1.0], [0.0, 1.0, 0.0]),
+    ];
+    for (o, d, n) in cases {
+        let ray = Ray::new(
+            Vec3::from(o.map(|x| x as renderer::Real)),
+            Vec3::from(d.map(|x| x as renderer::Real)),
+        );
+        let h = cube
+            .intersect(&ray, 0.0, INF)
+            .unwrap_or_else(|| panic!("the ray {ray:?} misses the cube"));
+        assert_eq!(
+            h.n_geo.to_array().map(|x| x as f32),
+            n,
+            "the ray {ray:?} crosses the faces at the same distance {}: the record must be \
+             the first axis's (renderer/src/shapes/cube.rs Crossing::of)",
+            h.t
+        );
+    }
+}
