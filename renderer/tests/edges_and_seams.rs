@@ -354,3 +354,43 @@ fn cube_edge_ties_take_the_first_axis() {
         );
     }
 }
+
+/// The cube's interval is open at both ends, as every shape's: an entry or an exit exactly
+/// at `t_max` is not a hit. And a ray that only touches an edge (entry and exit at the
+/// same distance) hits it there.
+#[test]
+fn cube_interval_is_open_and_an_edge_touch_hits() {
+    let cube = Shape::Cube;
+    let v = |x: f32, y: f32, z: f32| {
+        Vec3::new(
+            x as renderer::Real,
+            y as renderer::Real,
+            z as renderer::Real,
+        )
+    };
+    // Entering at t = 1; leaving from the centre at t = 1.
+    for (o, d) in [
+        (v(-2.0, 0.0, 0.0), v(1.0, 0.0, 0.0)),
+        (v(0.0, 0.0, 0.0), v(0.0, 0.0, 1.0)),
+    ] {
+        let ray = Ray::new(o, d);
+        assert!(
+            cube.intersect(&ray, 0.0, 1.0).is_none(),
+            "{ray:?}: a crossing exactly at t_max = 1 is outside the open interval \
+             (renderer/src/shapes/cube.rs Crossing::pick)"
+        );
+        assert!(
+            cube.intersect(&ray, 0.0, 1.5).is_some(),
+            "{ray:?} within t_max = 1.5"
+        );
+    }
+    // Touching the edge x = y = 1 only: the slabs' entry and exit are both t = 1.
+    let ray = Ray::new(v(0.0, 2.0, 0.0), v(1.0, -1.0, 0.0));
+    let h = cube.intersect(&ray, 0.0, INF).unwrap_or_else(|| {
+        panic!("{ray:?} touches the cube's edge (shapes/cube.rs Crossing::pick)")
+    });
+    assert_eq!(
+        (h.t as f32, h.n_geo.to_array().map(|x| x as f32)),
+        (1.0, [0.0, 1.0, 0.0])
+    );
+}
