@@ -147,19 +147,12 @@ impl Reach {
                 // is passed over by the comparisons below.)
                 let all = (d == 0.0) & inside | t1.is_nan();
                 let none = (d == 0.0) & !inside;
-                let a = if all {
-                    Real::NEG_INFINITY
+                let (a, b) = if all {
+                    (Real::NEG_INFINITY, Real::INFINITY)
                 } else if none {
-                    Real::INFINITY
+                    (Real::INFINITY, Real::NEG_INFINITY)
                 } else {
-                    a
-                };
-                let b = if all {
-                    Real::INFINITY
-                } else if none {
-                    Real::NEG_INFINITY
-                } else {
-                    b
+                    (a, b)
                 };
                 near = if a > near { a } else { near };
                 far = if b < far { b } else { far };
