@@ -343,15 +343,13 @@ pub(crate) fn mul(m: &Mat3, v: Vec3) -> Vec3 {
 mod tests {
     use super::*;
 
-    /// A small generator (xorshift64*), so the test needs no crate.
+    /// A counter through the sampler's `mix64` (as the lanes' tests draw).
     struct Gen(u64);
 
     impl Gen {
         fn next(&mut self) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            crate::sampler::mix64(self.0)
         }
 
         /// Mostly ordinary numbers of mixed sizes; one in four an awkward one (a signed
