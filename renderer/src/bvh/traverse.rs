@@ -398,10 +398,11 @@ fn lanes_of(mask: u32) -> impl Iterator<Item = usize> {
 }
 
 /// The lanes of `mask` by ascending `key`, ties in lane order (an insertion sort, stable),
-/// and how many there are.
+/// written into the first places of `lanes`, and how many there are. (Into the caller's
+/// array: an array returned was copied out with wide loads of the lanes just written one
+/// by one, which the processor cannot forward from its store buffer.)
 #[inline(always)]
-fn sorted_lanes<const W: usize>(mask: u32, key: &[Real; W]) -> ([usize; W], usize) {
-    let mut lanes = [0usize; W];
+fn sorted_lanes<const W: usize>(mask: u32, key: &[Real; W], lanes: &mut [usize; W]) -> usize {
     let mut k = 0;
     for lane in lanes_of(mask) {
         let mut j = k;
@@ -412,7 +413,7 @@ fn sorted_lanes<const W: usize>(mask: u32, key: &[Real; W]) -> ([usize; W], usiz
         lanes[j] = lane;
         k += 1;
     }
-    (lanes, k)
+    k
 }
 
 impl Walk {
@@ -435,7 +436,8 @@ impl Walk {
         // The step's keys: an any-hit search puts leaves first, and all lanes are leaves,
         // so they tie and keep lane order.
         let key = if any { [Real::NEG_INFINITY; W] } else { near };
-        let (lanes, k) = sorted_lanes(mask, &key);
+        let mut lanes = [0; W];
+        let k = sorted_lanes(mask, &key, &mut lanes);
         let grow = 1.0 + 2.0 * gamma(3);
         let (mut t_max, mut hit) = (self.t_max, false);
         for (i, &lane) in lanes[..k].iter().enumerate() {
@@ -606,7 +608,8 @@ impl Walk {
         key: &[Real; W],
         near: &[Real; W],
     ) -> usize {
-        let (lanes, k) = sorted_lanes(mask, key);
+        let mut lanes = [0; W];
+        let k = sorted_lanes(mask, key, &mut lanes);
         Walk::take_first(stack, n, &lanes[..k], near)
     }
 
@@ -793,7 +796,8 @@ mod tests {
                     }
                 });
                 let near: [Real; 8] = std::array::from_fn(|k| k as Real + u(case, 20 + k as u64));
-                let (lanes, k) = sorted_lanes(mask, &key);
+                let mut lanes = [0; 8];
+                let k = sorted_lanes(mask, &key, &mut lanes);
                 type Push =
                     fn(&mut ArrayVec<Entry, 16>, &Node<8>, u32, &[Real; 8], &[Real; 8]) -> usize;
                 let mut pushes: Vec<(&str, Push)> =
