@@ -7,8 +7,9 @@ use crate::real::{Real, Vec2, Vec3};
 /// Marks a hit whose material or object id comes from the enclosing instance.
 pub const INHERIT: u32 = u32::MAX;
 
-/// A hit record in the space of whoever returned it.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A hit record in the space of whoever returned it. (The default, all zeros, is only a
+/// place for a search to write its record into.)
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Hit {
     /// Ray parameter.
     pub t: Real,

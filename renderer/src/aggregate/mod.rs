@@ -116,6 +116,18 @@ impl Shape {
         }
     }
 
+    /// [`Shape::candidate`] written into `out` (left alone when there is no hit): the
+    /// search's own record ([`Best`]), so that the winner of a mesh or a definition, found
+    /// out of line, is not copied into it again.
+    #[inline(always)]
+    fn candidate_into(&self, ray: &Ray, t_min: Real, t_max: Real, out: &mut Hit) -> bool {
+        match self {
+            Shape::Mesh(m) => m.intersect_into(ray, t_min, t_max, out),
+            Shape::Group(g) => g.intersect_into::<true>(ray, t_min, t_max, out),
+            _ => put(self.candidate(ray, t_min, t_max), out),
+        }
+    }
+
     /// [`Shape::candidate`] for [`Aggregate::nearest`]: meshes and definitions search
     /// without building a record; every other shape's candidate is its record already.
     #[inline(always)]
@@ -276,6 +288,17 @@ impl Instance {
         }
     }
 
+    /// [`Instance::local_hit`] written into `out` ([`Shape::candidate_into`]).
+    #[inline]
+    fn local_hit_into(&self, ray: &Ray, t_min: Real, t_max: Real, out: &mut Hit) -> bool {
+        match &self.xf {
+            Some(x) => self
+                .shape
+                .candidate_into(&x.inv_ray(ray), t_min, t_max, out),
+            None => self.shape.candidate_into(ray, t_min, t_max, out),
+        }
+    }
+
     /// [`Instance::local_hit`] for [`Aggregate::nearest`].
     #[inline]
     fn nearest_local(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<RayHit> {
@@ -334,6 +357,43 @@ impl Instance {
                 .occluded_batch(&object_rays(x, rays)[..rays.len()], t_min, t_max),
             None => self.shape.occluded_batch(rays, t_min, t_max),
         }
+    }
+}
+
+/// The closest hit a search has found so far: the instance it came through (bounded, or
+/// unbounded after the bounded ones; [`Best::NONE`] while there is none) and its record,
+/// in that instance's object space. The instances' tests write the record in place
+/// ([`Aggregate::local_hit_into`]): a record they returned was copied into the search's
+/// with wide loads of fields just written one by one, which the processor cannot forward
+/// from its store buffer (a stall).
+#[derive(Clone, Copy)]
+struct Best {
+    k: usize,
+    h: Hit,
+}
+
+impl Best {
+    /// No hit yet.
+    const NONE: usize = usize::MAX;
+
+    #[inline(always)]
+    fn none() -> Self {
+        Best {
+            k: Best::NONE,
+            h: Hit::default(),
+        }
+    }
+}
+
+/// Writes `h` into `out` when there is one.
+#[inline(always)]
+fn put(h: Option<Hit>, out: &mut Hit) -> bool {
+    match h {
+        Some(h) => {
+            *out = h;
+            true
+        }
+        None => false,
     }
 }
 
@@ -582,14 +642,18 @@ impl Aggregate {
         (self.bounded() > 0).then(|| self.bvh.bounds())
     }
 
-    /// Closest hit of bounded instance `k`, in its object space.
+    /// Closest hit of bounded instance `k`, in its object space, written into `out` (left
+    /// alone when there is none).
     #[inline]
-    fn local_hit(&self, k: usize, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
+    fn local_hit_into(&self, k: usize, ray: &Ray, t_min: Real, t_max: Real, out: &mut Hit) -> bool {
         let lead = &self.leads[k];
         if lead.s != 0.0 {
-            shapes::sphere::intersect_bare(&lead.object_ray(ray), t_min, t_max)
+            put(
+                shapes::sphere::intersect_bare(&lead.object_ray(ray), t_min, t_max),
+                out,
+            )
         } else {
-            self.instances[k].local_hit(ray, t_min, t_max)
+            self.instances[k].local_hit_into(ray, t_min, t_max, out)
         }
     }
 
@@ -606,16 +670,47 @@ impl Aggregate {
         self.intersect_with::<false>(ray, t_min, t_max)
     }
 
+    /// [`Aggregate::intersect_for_shading`] written into `out` (left alone when there is no
+    /// hit): the caller's record, which the instances' tests then write in place
+    /// ([`Best`]). (A record returned was copied out with wide loads of fields just
+    /// written one by one: a store-forwarding stall in the path loop's every search.)
+    pub fn intersect_for_shading_into(
+        &self,
+        ray: &Ray,
+        t_min: Real,
+        t_max: Real,
+        out: &mut Hit,
+    ) -> bool {
+        self.intersect_into::<false>(ray, t_min, t_max, out)
+    }
+
     #[inline]
     fn intersect_with<const UV: bool>(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
-        let mut best = None;
-        let t_max = self.nearest_unbounded(ray, t_min, t_max, &mut best);
+        let mut h = Hit::default();
+        self.intersect_into::<UV>(ray, t_min, t_max, &mut h)
+            .then_some(h)
+    }
+
+    /// The search of [`Aggregate::intersect_with`], written into `h` (left alone when
+    /// there is no hit).
+    #[inline(always)]
+    fn intersect_into<const UV: bool>(
+        &self,
+        ray: &Ray,
+        t_min: Real,
+        t_max: Real,
+        h: &mut Hit,
+    ) -> bool {
+        let mut best = Best::NONE;
+        let t_max = self.nearest_unbounded(ray, t_min, t_max, &mut best, h);
         self.bvh.traverse(ray, t_min, t_max, false, |k, tmax| {
-            self.visit(k, ray, t_min, tmax, &mut best)
+            self.visit(k, ray, t_min, tmax, &mut best, h)
         });
-        let (k, mut h) = best?;
-        self.finish::<UV>(k, &mut h);
-        Some(h)
+        if best == Best::NONE {
+            return false;
+        }
+        self.finish::<UV>(best, h);
+        true
     }
 
     /// The closest hit among the unbounded instances, into `best` (left alone when there
@@ -630,12 +725,13 @@ impl Aggregate {
         ray: &Ray,
         t_min: Real,
         t_max: Real,
-        best: &mut Option<(usize, Hit)>,
+        best: &mut usize,
+        h: &mut Hit,
     ) -> Real {
         if self.bounded() == self.instances.len() {
             return t_max;
         }
-        self.nearest_of_unbounded(ray, t_min, t_max, best)
+        self.nearest_of_unbounded(ray, t_min, t_max, best, h)
     }
 
     /// [`Aggregate::nearest_unbounded`] when there are some.
@@ -645,13 +741,14 @@ impl Aggregate {
         ray: &Ray,
         t_min: Real,
         t_max: Real,
-        best: &mut Option<(usize, Hit)>,
+        best: &mut usize,
+        h: &mut Hit,
     ) -> Real {
         let mut t_max = t_max;
         for (k, inst) in self.unbounded().iter().enumerate() {
-            if let Some(h) = inst.local_hit(ray, t_min, t_max) {
+            if inst.local_hit_into(ray, t_min, t_max, h) {
                 t_max = h.t;
-                *best = Some((self.bounded() + k, h));
+                *best = self.bounded() + k;
             }
         }
         t_max
@@ -665,14 +762,14 @@ impl Aggregate {
         ray: &Ray,
         t_min: Real,
         t_max: Real,
-        best: &mut Option<(usize, Hit)>,
+        best: &mut usize,
+        h: &mut Hit,
     ) -> Visit {
-        match self.local_hit(k as usize, ray, t_min, t_max) {
-            Some(h) => {
-                *best = Some((k as usize, h));
-                Visit::Hit(h.t)
-            }
-            None => Visit::Miss,
+        if self.local_hit_into(k as usize, ray, t_min, t_max, h) {
+            *best = k as usize;
+            Visit::Hit(h.t)
+        } else {
+            Visit::Miss
         }
     }
 
@@ -744,27 +841,29 @@ impl Aggregate {
                 return;
             }
             let mut bound = [0.0; BATCH];
-            let mut unbounded: [Option<(usize, Hit)>; BATCH] = [None; BATCH];
+            let mut unbounded = [Best::none(); BATCH];
             for (r, ray) in rays.iter().enumerate() {
-                bound[r] = self.nearest_unbounded(ray, t_min, t_max[r], &mut unbounded[r]);
+                let u = &mut unbounded[r];
+                bound[r] = self.nearest_unbounded(ray, t_min, t_max[r], &mut u.k, &mut u.h);
             }
             self.instances[0].local_hit_batch(rays, t_min, &bound[..rays.len()], out);
-            for (o, u) in out.iter_mut().zip(unbounded) {
-                match (o.as_mut(), u) {
-                    (Some(h), _) => self.finish::<UV>(0, h),
-                    (None, Some((k, mut h))) => {
-                        self.finish::<UV>(k, &mut h);
-                        *o = Some(h);
+            for (o, mut u) in out.iter_mut().zip(unbounded) {
+                match o.as_mut() {
+                    Some(h) => self.finish::<UV>(0, h),
+                    None if u.k != Best::NONE => {
+                        self.finish::<UV>(u.k, &mut u.h);
+                        *o = Some(u.h);
                     }
-                    (None, None) => {}
+                    None => {}
                 }
             }
             return;
         }
-        let mut best: [Option<(usize, Hit)>; BATCH] = [None; BATCH];
+        let mut best = [Best::none(); BATCH];
         let mut bound = [0.0; BATCH];
         for (r, ray) in rays.iter().enumerate() {
-            bound[r] = self.nearest_unbounded(ray, t_min, t_max[r], &mut best[r]);
+            let b = &mut best[r];
+            bound[r] = self.nearest_unbounded(ray, t_min, t_max[r], &mut b.k, &mut b.h);
         }
         let bound = &bound[..rays.len()];
         if self.interleaves() {
@@ -772,20 +871,24 @@ impl Aggregate {
                 rays,
                 t_min,
                 bound,
-                |r, k, tmax| self.visit(k, &rays[r], t_min, tmax, &mut best[r]),
+                |r, k, tmax| {
+                    let b = &mut best[r];
+                    self.visit(k, &rays[r], t_min, tmax, &mut b.k, &mut b.h)
+                },
                 |first| self.leads.as_ptr().wrapping_add(first as usize).cast(),
             );
         } else {
             for (r, ray) in rays.iter().enumerate() {
                 self.bvh.traverse(ray, t_min, bound[r], false, |k, tmax| {
-                    self.visit(k, ray, t_min, tmax, &mut best[r])
+                    let b = &mut best[r];
+                    self.visit(k, ray, t_min, tmax, &mut b.k, &mut b.h)
                 });
             }
         }
-        for (o, b) in out.iter_mut().zip(best) {
-            *o = b.map(|(k, mut h)| {
-                self.finish::<UV>(k, &mut h);
-                h
+        for (o, mut b) in out.iter_mut().zip(best) {
+            *o = (b.k != Best::NONE).then(|| {
+                self.finish::<UV>(b.k, &mut b.h);
+                b.h
             });
         }
     }

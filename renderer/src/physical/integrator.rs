@@ -431,11 +431,13 @@ impl<'a> PhysicalIntegrator<'a> {
         let mut caustic = false;
         // The shading normal of the previous vertex, when it had a density (env_pdf).
         let mut prev_n = glam::DVec3::ZERO;
-        // The camera ray's hit is given; each vertex finds the next one's.
-        let mut found = first;
+        // The camera ray's hit is given; each vertex finds the next one's, written in
+        // place (`intersect_for_shading_into`).
+        let mut found = first.is_some();
+        let mut hit = first.unwrap_or_default();
         loop {
             let dir = dv(d).normalize();
-            let Some(hit) = found else {
+            if !found {
                 if let Some(env) = self.env {
                     let w = if prev_pdf > 0.0 {
                         mis(prev_pdf, env_pdf(prev_n, dir) * self.select)
@@ -445,7 +447,7 @@ impl<'a> PhysicalIntegrator<'a> {
                     l += beta * env * w;
                 }
                 break;
-            };
+            }
             let s = self.surface(&hit);
             let wo = -dir;
             let le = self.emitted(&s, wo);
@@ -526,10 +528,10 @@ impl<'a> PhysicalIntegrator<'a> {
             }
             let (ray, t_min) = self.spawn.ray(s.p, s.err, rv(s.ng), rv(bs.dir));
             (origin, d) = (ray.o, ray.d);
-            found = self
-                .scene
-                .root
-                .intersect_for_shading(&ray, t_min, Real::INFINITY);
+            found =
+                self.scene
+                    .root
+                    .intersect_for_shading_into(&ray, t_min, Real::INFINITY, &mut hit);
         }
         l
     }

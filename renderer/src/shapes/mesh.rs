@@ -240,6 +240,19 @@ impl Mesh {
         self.search(ray, t_min, t_max).map(|c| self.finish(c))
     }
 
+    /// [`Mesh::intersect`] written into `out` (left alone when there is no hit): the
+    /// caller's record, so that it does not copy the one returned (aggregate/mod.rs's
+    /// `Best`).
+    pub fn intersect_into(&self, ray: &Ray, t_min: Real, t_max: Real, out: &mut Hit) -> bool {
+        match self.search(ray, t_min, t_max) {
+            Some(c) => {
+                *out = self.finish(c);
+                true
+            }
+            None => false,
+        }
+    }
+
     /// The closest hit as a [`RayHit`]: the search of [`Mesh::intersect`], and of its
     /// winner only the geometric normal, the barycentrics and the number, which the record
     /// computes the same way (the point, its error bound and the shading normal are left
