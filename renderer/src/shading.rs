@@ -145,13 +145,17 @@ impl<'a> Shader<'a> {
         if self.cut_off(level, weight) {
             return Color::ZERO;
         }
-        match self
+        // The record written in place (`intersect_for_shading_into`: one returned is
+        // copied out with wide loads of fields just written, a store-forwarding stall).
+        let mut hit = Hit::default();
+        if self
             .scene
             .root
-            .intersect_for_shading(ray, t_min, Real::INFINITY)
+            .intersect_for_shading_into(ray, t_min, Real::INFINITY, &mut hit)
         {
-            None => self.scene.settings.background,
-            Some(hit) => self.shade(ray, &hit, level, weight, interiors),
+            self.shade(ray, &hit, level, weight, interiors)
+        } else {
+            self.scene.settings.background
         }
     }
 
@@ -315,14 +319,15 @@ impl<'a> Shader<'a> {
         let mut t_min = t_min;
         let mut filter = Color::ONE;
         // Follow the shadow ray through transparent blockers (bounded, allocation-free).
+        let mut hit = Hit::default();
         for _ in 0..64 {
-            let Some(hit) = self
+            if !self
                 .scene
                 .root
-                .intersect_for_shading(&ray, t_min, remaining)
-            else {
+                .intersect_for_shading_into(&ray, t_min, remaining, &mut hit)
+            {
                 return filter;
-            };
+            }
             let m = self.scene.material(hit.material);
             if m.filter == 0.0 && m.transmit == 0.0 {
                 return Color::ZERO;

@@ -247,11 +247,16 @@ impl LightPaths {
         let mut beta = rgb(light.radiance) * (cos_y * lights.len() as f64 / (pdf_area * pdf_dir));
         let (mut ray, mut t_min) = t.spawn.ray(rv(y), err, rv(ny), rv(dir));
         let mut specular = 0;
+        // The record written in place, as the camera paths' (integrator.rs).
+        let mut hit = crate::hit::Hit::default();
         loop {
-            let hit = t
+            if !t
                 .scene
                 .root
-                .intersect_for_shading(&ray, t_min, Real::INFINITY)?;
+                .intersect_for_shading_into(&ray, t_min, Real::INFINITY, &mut hit)
+            {
+                return None;
+            }
             let s = t.surface(&hit);
             let w_in = -dv(ray.d).normalize();
             if !s.is_delta() {
