@@ -378,7 +378,8 @@ impl Instance {
 /// in that instance's object space. The instances' tests write the record in place
 /// ([`Aggregate::local_hit_into`]): a record they returned was copied into the search's
 /// with wide loads of fields just written one by one, which the processor cannot forward
-/// from its store buffer (a stall).
+/// from its store buffer (a stall). The batch search keeps one a ray; the one-ray search
+/// ([`Aggregate::intersect_into`]) keeps the index alone, its record being the caller's.
 #[derive(Clone, Copy)]
 struct Best {
     k: usize,
@@ -726,8 +727,9 @@ impl Aggregate {
         true
     }
 
-    /// The closest hit among the unbounded instances, into `best` (left alone when there
-    /// is none), and the end of the interval it leaves for the BVH. (It writes the
+    /// The closest hit among the unbounded instances, its index into `best` and its record
+    /// into `h` (both left alone when there is none), and the end of the interval it
+    /// leaves for the BVH. (It writes the
     /// caller's record rather than returning one: a returned record was copied with wide
     /// loads of fields just written one by one, which stalls store forwarding.)
     /// (Inlined down to the test for none, the common case: as a call it cost a scene
@@ -767,7 +769,9 @@ impl Aggregate {
         t_max
     }
 
-    /// Tests bounded instance `k` for [`Bvh::traverse`], keeping a closer hit in `best`.
+    /// Tests bounded instance `k` for [`Bvh::traverse`]: a hit (closer than the walk's
+    /// `t_max`, so than any before it) becomes the best, its index in `best` and its
+    /// record written into `h`.
     #[inline(always)]
     fn visit(
         &self,
