@@ -1029,4 +1029,53 @@ mod tests {
         // And the same sphere from t_min = 0: neither.
         assert_eq!(hit_and_met(&behind, ray, 0.0), (false, false));
     }
+
+    /// The skip does its work: a batch that passes beside a box is ruled out even when
+    /// its rays start inside one of the box's slabs, parallel to it or not. (cargo-mutants
+    /// found both unpinned: a slab that counts a ray inside it as meeting it everywhere
+    /// whatever its direction, or a parallel ray outside it as meeting it, never rules
+    /// out a wrong batch, so `reach_rules_out_only_batches_that_miss` passes; it only
+    /// stops skipping.)
+    #[test]
+    fn reach_rules_out_rays_beside_it_from_inside_a_slab() {
+        use crate::transform::{Affine64, Transform};
+        // A cube of half-size 0.5 at the origin.
+        let x = Transform::new(&Affine64 {
+            m: glam::DMat3::from_diagonal(glam::DVec3::splat(0.5)),
+            d: glam::DVec3::ZERO,
+        })
+        .unwrap();
+        let unit = Aabb::from_points(Vec3::splat(-1.0), Vec3::ONE);
+        let xf = Some((x.inverse_matrix(), x.matrix(), x.translation()));
+        let cube = Item::new(Kind::Cube, xf, &x.bounds(&unit), 0, 1, 0);
+        let reach = cube.reach.unwrap();
+        let bound = [Real::INFINITY; BATCH];
+        let cases = [
+            // Inside the x and z slabs, above the box, leaving the x slab (at t = 0.5)
+            // before it comes down into the y slab (at t = 1).
+            (
+                "from inside the x slab, leaving it first",
+                Ray::new(Vec3::new(0.0, 1.0, 0.0), Vec3::new(1.0, -0.5, 0.0)),
+            ),
+            // Parallel to the x and y slabs, inside x's and above y's.
+            (
+                "parallel to y's slab, outside it",
+                Ray::new(Vec3::new(0.0, 2.0, -5.0), Vec3::Z),
+            ),
+        ];
+        for (what, ray) in cases {
+            let lanes = Rays::of(&[ray]);
+            let t = distances(cube.kind, &lanes.mapped(&cube.xf), 0.0, &bound)[0];
+            assert_eq!(
+                t,
+                Real::INFINITY,
+                "{what}: the ray misses the cube ({ray:?})"
+            );
+            assert!(
+                !reach.met(&lanes, lanes.largest_origin(), 0.0, &bound),
+                "aggregate/lanes.rs Reach::met: a batch {what} passes beside the cube and must \
+                 be ruled out ({ray:?})"
+            );
+        }
+    }
 }
