@@ -1031,11 +1031,12 @@ mod tests {
     }
 
     /// The skip does its work: a batch that passes beside a box is ruled out even when
-    /// its rays start inside one of the box's slabs, parallel to it or not. (cargo-mutants
-    /// found both unpinned: a slab that counts a ray inside it as meeting it everywhere
-    /// whatever its direction, or a parallel ray outside it as meeting it, never rules
-    /// out a wrong batch, so `reach_rules_out_only_batches_that_miss` passes; it only
-    /// stops skipping.)
+    /// its rays start inside one of the box's slabs, parallel to it or not, and so is one
+    /// whose search ends before it reaches the box. (cargo-mutants
+    /// found these unpinned: a slab that counts a ray inside it as meeting it everywhere
+    /// whatever its direction, a parallel ray outside it as meeting it, or a search's end
+    /// as ruling out only a box entered exactly there, never rules out a wrong batch, so
+    /// `reach_rules_out_only_batches_that_miss` passes; it only stops skipping.)
     #[test]
     fn reach_rules_out_rays_beside_it_from_inside_a_slab() {
         use crate::transform::{Affine64, Transform};
@@ -1049,21 +1050,29 @@ mod tests {
         let xf = Some((x.inverse_matrix(), x.matrix(), x.translation()));
         let cube = Item::new(Kind::Cube, xf, &x.bounds(&unit), 0, 1, 0);
         let reach = cube.reach.unwrap();
-        let bound = [Real::INFINITY; BATCH];
         let cases = [
             // Inside the x and z slabs, above the box, leaving the x slab (at t = 0.5)
             // before it comes down into the y slab (at t = 1).
             (
                 "from inside the x slab, leaving it first",
                 Ray::new(Vec3::new(0.0, 1.0, 0.0), Vec3::new(1.0, -0.5, 0.0)),
+                Real::INFINITY,
             ),
             // Parallel to the x and y slabs, inside x's and above y's.
             (
                 "parallel to y's slab, outside it",
                 Ray::new(Vec3::new(0.0, 2.0, -5.0), Vec3::Z),
+                Real::INFINITY,
+            ),
+            // Straight at the box (entered at t = 4.5), its search ending at t = 2.
+            (
+                "whose search ends before the box",
+                Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z),
+                2.0,
             ),
         ];
-        for (what, ray) in cases {
+        for (what, ray, end) in cases {
+            let bound = [end; BATCH];
             let lanes = Rays::of(&[ray]);
             let t = distances(cube.kind, &lanes.mapped(&cube.xf), 0.0, &bound)[0];
             assert_eq!(
