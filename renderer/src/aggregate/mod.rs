@@ -107,18 +107,17 @@ impl Shape {
     /// [`Shape::intersect`] as the search for a closest hit needs it: a record that
     /// [`Shape::complete`] finishes once the search has a winner (a sphere leaves out its
     /// uv, which costs an `acos` and an `atan2`, for every candidate that loses).
+    /// [`Shape::candidate_into`] says which test each shape's candidate comes from.
     #[inline(always)]
     fn candidate(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
-        match self {
-            Shape::Sphere => shapes::sphere::intersect_bare(ray, t_min, t_max),
-            Shape::Anchored(a) => a.intersect_bare(ray, t_min, t_max),
-            _ => self.intersect(ray, t_min, t_max),
-        }
+        let mut h = Hit::default();
+        self.candidate_into(ray, t_min, t_max, &mut h).then_some(h)
     }
 
     /// [`Shape::candidate`] written into `out` (left alone when there is no hit): the
     /// search's own record ([`Best`]), so that the winner of a mesh or a definition, found
-    /// out of line, is not copied into it again.
+    /// out of line, is not copied into it again. The one place that says which test a
+    /// shape's candidate is: [`Shape::intersect`]'s, but for the spheres' bare tests.
     /// (Each shape's test is written into `out` in its own arm: a record chosen by the
     /// match and then written was built in memory first and copied, 6 % more
     /// instructions on a Whitted frame.)
@@ -286,22 +285,17 @@ impl Instance {
     /// Closest hit in the outer space.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
-        let mut h = self.local_hit(ray, t_min, t_max)?;
+        let mut h = Hit::default();
+        if !self.local_hit_into(ray, t_min, t_max, &mut h) {
+            return None;
+        }
         self.finish::<true>(&mut h);
         Some(h)
     }
 
     /// Closest hit in object space (`t` is the same in both spaces), as a candidate that
-    /// [`Instance::finish`] completes ([`Shape::candidate`]).
-    #[inline]
-    fn local_hit(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<Hit> {
-        match &self.xf {
-            Some(x) => self.shape.candidate(&x.inv_ray(ray), t_min, t_max),
-            None => self.shape.candidate(ray, t_min, t_max),
-        }
-    }
-
-    /// [`Instance::local_hit`] written into `out` ([`Shape::candidate_into`]).
+    /// [`Instance::finish`] completes ([`Shape::candidate_into`]), written into `out` (left
+    /// alone when there is none).
     #[inline]
     fn local_hit_into(&self, ray: &Ray, t_min: Real, t_max: Real, out: &mut Hit) -> bool {
         match &self.xf {
@@ -312,7 +306,7 @@ impl Instance {
         }
     }
 
-    /// [`Instance::local_hit`] for [`Aggregate::nearest`].
+    /// [`Instance::local_hit_into`] for [`Aggregate::nearest`].
     #[inline]
     fn nearest_local(&self, ray: &Ray, t_min: Real, t_max: Real) -> Option<RayHit> {
         match &self.xf {
@@ -321,7 +315,7 @@ impl Instance {
         }
     }
 
-    /// [`Instance::local_hit`] for up to [`BATCH`] rays, each with its own `t_max`: the
+    /// [`Instance::local_hit_into`] for up to [`BATCH`] rays, each with its own `t_max`: the
     /// shape walks them together where it has a tree of its own.
     fn local_hit_batch(&self, rays: &[Ray], t_min: Real, t_max: &[Real], out: &mut [Option<Hit>]) {
         match &self.xf {
@@ -333,7 +327,7 @@ impl Instance {
         }
     }
 
-    /// Maps an object-space hit of [`Instance::local_hit`] to the outer space and fills in
+    /// Maps an object-space hit of [`Instance::local_hit_into`] to the outer space and fills in
     /// the material and object id it inherits.
     #[inline]
     fn finish<const UV: bool>(&self, h: &mut Hit) {
