@@ -200,10 +200,14 @@ pub(super) struct Walk {
     pub(super) count: u8,
     pub(super) hit: bool,
     /// Whether a prefetching walk (`ALL`) asks for every overlapped child yet. A search
-    /// for the closest hit does from the start; a search for any hit only once a leaf has
-    /// failed to end it: when the first leaf tested (leaves go first, and a large
-    /// occluder such as a ground quad sits near the root) ends the search, as it does for
-    /// most rays aimed at such a surface, prefetches would be wasted.
+    /// for the closest hit does from the start, and so does a search for any hit in a
+    /// tree its owner says is larger than the cache (a mesh past `INTERLEAVE_ABOVE`:
+    /// there most shadow rays walk on past their first leaf, and the children passed on
+    /// the way down would otherwise be missed one after another). Otherwise a search for
+    /// any hit asks only once a leaf has failed to end it: when the first leaf tested
+    /// (leaves go first, and a large occluder such as a ground quad sits near the root)
+    /// ends the search, as it does for most rays aimed at such a surface, prefetches
+    /// would be wasted.
     pub(super) eager: bool,
 }
 

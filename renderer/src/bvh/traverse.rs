@@ -94,7 +94,7 @@ impl<const W: usize> Bvh<W> {
     where
         F: FnMut(u32, u8, Real) -> Visit,
     {
-        self.walk_one::<false, F>(ray, t_min, t_max, any, visit, &|_, _| {})
+        self.walk_one::<false, F>(ray, t_min, t_max, any, false, visit, &|_, _| {})
     }
 
     /// [`Bvh::traverse_leaves`] for a tree larger than the cache: as soon as a node's
@@ -102,17 +102,21 @@ impl<const W: usize> Bvh<W> {
     /// them (a prefetch: the child nodes, or the records of the leaves, which start at
     /// `leaf_at(first)`), so their cache misses overlap each other and the work on
     /// the nearest child, instead of following one another. The walk, and so every
-    /// result, is the same. A search for any hit starts asking only once a leaf has failed
-    /// to end it (`Walk::eager`). (Always inlined: as a call shared by a mesh's two
-    /// searches, `Mesh::intersect` and `Mesh::nearest`, it cost the first +2.2 %
-    /// instructions on the peers bench's coherent rays.)
+    /// result, is the same. A search for any hit starts asking from its first step when
+    /// `eager` (the owner's choice: a mesh does when its tree is larger than the cache,
+    /// where its shadow rays mostly walk on past their first leaf), else only once a leaf
+    /// has failed to end it (`Walk::eager`). (Always inlined: as a call shared by a
+    /// mesh's two searches, `Mesh::intersect` and `Mesh::nearest`, it cost the first
+    /// +2.2 % instructions on the peers bench's coherent rays.)
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     pub fn traverse_leaves_prefetching<F, L>(
         &self,
         ray: &Ray,
         t_min: Real,
         t_max: Real,
         any: bool,
+        eager: bool,
         visit: F,
         leaf_at: L,
     ) -> bool
@@ -120,7 +124,8 @@ impl<const W: usize> Bvh<W> {
         F: FnMut(u32, u8, Real) -> Visit,
         L: Fn(u32) -> *const u8,
     {
-        self.walk_one::<true, F>(ray, t_min, t_max, any, visit, &self.ahead(leaf_at))
+        let ahead = self.ahead(leaf_at);
+        self.walk_one::<true, F>(ray, t_min, t_max, any, !any || eager, visit, &ahead)
     }
 
     /// The prefetch of a child: [`AHEAD_LINES`] cache lines from its node, or from its
@@ -137,15 +142,17 @@ impl<const W: usize> Bvh<W> {
         }
     }
 
-    /// The single-ray walk; `ahead` is given every overlapped child (with `ALL`) or the
-    /// next child to take.
+    /// The single-ray walk; `ahead` is given every overlapped child (with `ALL`, from the
+    /// first step when `eager`, see `Walk::eager`) or the next child to take.
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn walk_one<const ALL: bool, F>(
         &self,
         ray: &Ray,
         t_min: Real,
         t_max: Real,
         any: bool,
+        eager: bool,
         mut visit: F,
         ahead: &impl Fn(u32, u8),
     ) -> bool
@@ -167,7 +174,7 @@ impl<const W: usize> Bvh<W> {
             }
             return matches!(visit(first, count, t_max), Visit::Hit(_));
         }
-        let mut w = Walk::new(ray, t_min, t_max, !any);
+        let mut w = Walk::new(ray, t_min, t_max, eager);
         if self.stack_need <= TINY_STACK {
             let mut stack = ArrayVec::<Entry, TINY_STACK>::new();
             while w.step::<_, _, _, ALL>(&mut stack, &self.nodes, any, &mut visit, ahead) {}
@@ -318,9 +325,10 @@ fn each<F: FnMut(u32, Real) -> Visit>(
 }
 
 /// Cache lines a prefetch of a child asks for: a node is four (256 bytes at 8 lanes), a
-/// mesh leaf of two packs five or six (288 bytes at a multiple of 16: six when the first
-/// pack starts 48 bytes into a line, and then the sixth, the second pack's last 16
-/// bytes, is not asked for), of one pack three, and the instance records of a leaf (32
+/// mesh leaf of two packs five or six (320 bytes in `f32`, at a multiple of 32: six when
+/// the first pack starts 32 bytes into a line, and then the sixth, the second pack's
+/// last 32 bytes, is not asked for; a sixth line for every child measured no better), of
+/// one pack three, and the instance records of a leaf (32
 /// bytes each) one or two. As many whatever the child is, so that the walk does not
 /// branch on it (`Bvh::ahead`).
 const AHEAD_LINES: usize = 5;

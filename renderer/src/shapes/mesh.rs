@@ -22,16 +22,15 @@ pub struct Mesh {
     bvh: Bvh<8>,
     /// The triangles' vertices, four per pack, in the BVH's slot order: every leaf starts
     /// a pack, so a leaf is tested a pack (four triangles) at a time with no index array
-    /// in between. (36 bytes per triangle, plus the padding of partly filled packs.)
+    /// in between. Each lane also holds its triangle's number in the order it was given
+    /// (the file's; `u32::MAX` for padding): the hit's `prim`, read once a search from
+    /// the winner's pack, whose lines the test just read (in an array of its own it was a
+    /// cache miss a ray), and what [`Mesh::triangles_as_given`] undoes. (40 bytes per
+    /// triangle in `f32`, plus the padding of partly filled packs.)
     packs: Vec<TriPack>,
     /// For each pack lane, its triangle's index in `triangles` (`u32::MAX` for padding):
     /// read for the winner's normals and uvs only.
     pack_tris: Vec<[u32; 4]>,
-    /// For each pack lane, its triangle's number in the order it was given (the file's;
-    /// `u32::MAX` for padding): the hit's `prim`, read once a search, straight from the
-    /// winner's pack and lane (through `pack_tris` it was two dependent reads at
-    /// scattered addresses), and what [`Mesh::triangles_as_given`] undoes.
-    pack_given: Vec<[u32; 4]>,
 }
 
 /// The closest hit so far in a mesh search: the triangle (its pack and lane), `t` and the
@@ -118,7 +117,6 @@ impl Mesh {
         let mut packs = crate::pages::huge_with_capacity(slots.len() / 4);
         let advised = packs.as_ptr();
         let mut pack_tris = Vec::with_capacity(slots.len() / 4);
-        let mut pack_given = Vec::with_capacity(slots.len() / 4);
         for chunk in slots.chunks(4) {
             let mut verts = Vec::with_capacity(4);
             let (mut ids, mut numbers) = ([u32::MAX; 4], [u32::MAX; 4]);
@@ -130,9 +128,8 @@ impl Mesh {
                     triangles.push(*t);
                 }
             }
-            packs.push(TriPack::new(&verts));
+            packs.push(TriPack::new(&verts, numbers));
             pack_tris.push(ids);
-            pack_given.push(numbers);
         }
         debug_assert_eq!(
             packs.as_ptr(),
@@ -147,7 +144,6 @@ impl Mesh {
             bvh,
             packs,
             pack_tris,
-            pack_given,
         })
     }
 
@@ -215,8 +211,8 @@ impl Mesh {
     /// does not change with the tree.
     pub fn triangles_as_given(&self) -> Vec<[u32; 3]> {
         let mut out = vec![[0; 3]; self.triangles.len()];
-        for (ids, numbers) in self.pack_tris.iter().zip(&self.pack_given) {
-            for (&i, &g) in ids.iter().zip(numbers).filter(|(&i, _)| i != u32::MAX) {
+        for (ids, pack) in self.pack_tris.iter().zip(&self.packs) {
+            for (&i, &g) in ids.iter().zip(&pack.number).filter(|(&i, _)| i != u32::MAX) {
                 out[g as usize] = self.triangles[i as usize];
             }
         }
@@ -265,7 +261,7 @@ impl Mesh {
             n_geo: geometric_normal(&self.packs[pack].triangle(lane)),
             b: Vec2::new(c.b[1], c.b[2]),
             surface: 0,
-            prim: self.pack_given[pack][lane],
+            prim: self.packs[pack].number[lane],
         })
     }
 
@@ -279,6 +275,7 @@ impl Mesh {
             t_min,
             t_max,
             false,
+            true,
             |first, count, tmax| self.visit_leaf(&wr, first, count, t_min, tmax, &mut best),
             |first| self.leaf_at(first),
         );
@@ -323,9 +320,10 @@ impl Mesh {
     }
 
     /// Where the packs of the leaf at slots `first..` start, for the walk's prefetch
-    /// ahead of its test (a leaf has one or two packs; the prefetch's five lines cover
-    /// them but for the second pack's last 16 bytes when the first starts 48 bytes into
-    /// a line; the rare larger leaf, of coincident centroids or past the depth limit,
+    /// ahead of its test (a leaf has one or two packs of 160 bytes in `f32`; the
+    /// prefetch's five lines cover them but for the second pack's last 32 bytes, its
+    /// last coordinate row and its numbers, when the first starts 32 bytes into a line;
+    /// the rare larger leaf, of coincident centroids or past the depth limit,
     /// gets about its first two).
     #[inline(always)]
     fn leaf_at(&self, first: u32) -> *const u8 {
@@ -396,7 +394,7 @@ impl Mesh {
         let uv = self.uvs.as_deref().zip(tri).map(|(v, t)| pick3(v, t));
         let n_geo = geometric_normal(&[p0, p1, p2]);
         let mut hit = surface(t, b, [p0, p1, p2], n_geo, n.as_ref(), uv.as_ref());
-        hit.prim = self.pack_given[pack][lane];
+        hit.prim = self.packs[pack].number[lane];
         hit
     }
 
@@ -408,6 +406,7 @@ impl Mesh {
             t_min,
             t_max,
             true,
+            self.interleaves(),
             |first, count, tmax| self.any_in_leaf(&wr, first, count, t_min, tmax),
             |first| self.leaf_at(first),
         )

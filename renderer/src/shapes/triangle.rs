@@ -98,11 +98,15 @@ impl WoopRay {
 #[derive(Clone, Copy, Debug)]
 pub struct TriPack {
     pub(crate) v: [[Real; 4]; 9],
+    /// A number the owner keeps with each lane's triangle (a mesh: its number as given),
+    /// beside the vertices, so that the winner's is read from lines the test just read.
+    pub(crate) number: [u32; 4],
 }
 
 impl TriPack {
-    /// Packs up to four triangles (missing lanes are zero and must be masked off).
-    pub fn new(tris: &[[Vec3; 3]]) -> TriPack {
+    /// Packs up to four triangles (missing lanes are zero and must be masked off), each
+    /// with its number (`u32::MAX` in a missing lane).
+    pub fn new(tris: &[[Vec3; 3]], number: [u32; 4]) -> TriPack {
         let mut v = [[0.0; 4]; 9];
         for (lane, t) in tris.iter().enumerate() {
             for k in 0..3 {
@@ -111,7 +115,7 @@ impl TriPack {
                 }
             }
         }
-        TriPack { v }
+        TriPack { v, number }
     }
 
     /// The vertices of the triangle in `lane`.
@@ -449,7 +453,7 @@ mod tests {
             if let Some(k) = tie {
                 tris[lanes - 1] = tris[k];
             }
-            let pack = TriPack::new(&tris);
+            let pack = TriPack::new(&tris, [u32::MAX; 4]);
             for (t_min, t_max) in [(0.0, Real::INFINITY), (2.5, 3.5)] {
                 let want = scalar_loop(&wr, &tris, t_min, t_max);
                 let got = wr.hit4(&pack, lanes, t_min, t_max);
