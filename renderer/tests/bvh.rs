@@ -1265,6 +1265,37 @@ fn meshes_give_their_triangles_back_in_the_given_order() {
         given,
         "Mesh::triangles_as_given (renderer/src/shapes/mesh.rs) lost the given order"
     );
+    // A hit's `prim` is its triangle's number as given (Embree's primID), which each pack
+    // keeps beside its triangles: a ray down through every triangle's centroid, from the
+    // full search, the lean one and the batch.
+    let rays: Vec<Ray> = given
+        .iter()
+        .map(|t| {
+            let c = t.iter().fold(DVec3::ZERO, |a, &k| {
+                a + DVec3::new((k % (n + 1)) as f64, (k / (n + 1)) as f64, 0.0) / 3.0
+            });
+            Ray::new(vec3(c + DVec3::Z), Vec3::new(0.0, 0.0, -1.0))
+        })
+        .collect();
+    let mut batch = vec![None; 16];
+    for (chunk, rays) in rays.chunks(16).enumerate() {
+        mesh.intersect_batch(rays, 0.0, &[Real::INFINITY; 16][..rays.len()], &mut batch);
+        for (k, ray) in rays.iter().enumerate() {
+            let want = (chunk * 16 + k) as u32;
+            let got = (
+                mesh.intersect(ray, 0.0, Real::INFINITY).map(|h| h.prim),
+                mesh.nearest(ray, 0.0, Real::INFINITY).map(|h| h.prim),
+                batch[k].as_ref().map(|h| h.prim),
+            );
+            assert_eq!(
+                got,
+                (Some(want), Some(want), Some(want)),
+                "a ray through triangle {want}'s centroid: the hit's prim from Mesh::intersect, \
+                 Mesh::nearest and Mesh::intersect_batch (renderer/src/shapes/mesh.rs) is not \
+                 that triangle's number as given (TriPack::number)"
+            );
+        }
+    }
 }
 
 /// A small scene of spheres, cubes, cylinders (capped or open), rectangles, disks and
