@@ -328,9 +328,8 @@ fn each<F: FnMut(u32, Real) -> Visit>(
 /// mesh leaf of two packs five or six (320 bytes in `f32`, at a multiple of 32: six when
 /// the first pack starts 32 bytes into a line, and then the sixth, the second pack's
 /// last 32 bytes, is not asked for; a sixth line for every child measured no better), of
-/// one pack three, and the instance records of a leaf (32
-/// bytes each) one or two. As many whatever the child is, so that the walk does not
-/// branch on it (`Bvh::ahead`).
+/// one pack three, and the instance records of a leaf (32 bytes each) one or two. As
+/// many whatever the child is, so that the walk does not branch on it (`Bvh::ahead`).
 const AHEAD_LINES: usize = 5;
 
 /// Asks the processor to start loading the [`AHEAD_LINES`] cache lines from the one that
