@@ -1268,20 +1268,23 @@ fn meshes_give_their_triangles_back_in_the_given_order() {
     // A hit's `prim` is its triangle's number as given (Embree's primID), which each pack
     // keeps beside its triangles: a ray down through every triangle's centroid, from the
     // full search, the lean one and the batch.
+    let batch_len = renderer::bvh::BATCH;
     let rays: Vec<Ray> = given
         .iter()
         .map(|t| {
-            let c = t.iter().fold(DVec3::ZERO, |a, &k| {
-                a + DVec3::new((k % (n + 1)) as f64, (k / (n + 1)) as f64, 0.0) / 3.0
-            });
-            Ray::new(vec3(c + DVec3::Z), Vec3::new(0.0, 0.0, -1.0))
+            let c = t
+                .iter()
+                .fold(Vec3::ZERO, |a, &k| a + mesh.positions[k as usize])
+                / 3.0;
+            Ray::new(c + Vec3::Z, Vec3::new(0.0, 0.0, -1.0))
         })
         .collect();
-    let mut batch = vec![None; 16];
-    for (chunk, rays) in rays.chunks(16).enumerate() {
-        mesh.intersect_batch(rays, 0.0, &[Real::INFINITY; 16][..rays.len()], &mut batch);
+    let mut batch = vec![None; batch_len];
+    for (chunk, rays) in rays.chunks(batch_len).enumerate() {
+        let ends = vec![Real::INFINITY; rays.len()];
+        mesh.intersect_batch(rays, 0.0, &ends, &mut batch);
         for (k, ray) in rays.iter().enumerate() {
-            let want = (chunk * 16 + k) as u32;
+            let want = (chunk * batch_len + k) as u32;
             let got = (
                 mesh.intersect(ray, 0.0, Real::INFINITY).map(|h| h.prim),
                 mesh.nearest(ray, 0.0, Real::INFINITY).map(|h| h.prim),
