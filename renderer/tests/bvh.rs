@@ -1416,6 +1416,98 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
     assert!(hits > 1500, "only {hits} rays hit");
 }
 
+/// `Aggregate::intersect_for_shading_if`, the search for a path's last vertex, finds what
+/// `intersect_for_shading` finds, and finishes the record only when the hit's material is
+/// wanted: on scenes of every shape, meshes, definitions whose members have materials of
+/// their own or inherit the placing instance's, and spheres placed by a scale and a
+/// translation (the aggregate's leads, which keep their material apart), each ray is
+/// asked with the even materials wanted, then the odd ones.
+#[test]
+fn the_last_vertex_search_finishes_only_wanted_materials() {
+    let mut rng = SplitMix(2911);
+    let mesh = Arc::new(bumpy_sphere(8, 12, 3));
+    let group = Arc::new(Aggregate::new(
+        (0..3)
+            .map(|k| Instance {
+                shape: [Shape::Sphere, Shape::Cube, Shape::Cone { capped: true }][k].clone(),
+                xf: Some(Transform::new(&random_affine(&mut rng, 1.0, 0.6)).unwrap()),
+                // The middle member has its own material; the others inherit.
+                material: if k == 1 {
+                    7
+                } else {
+                    renderer::aggregate::INHERIT
+                },
+                object_id: 0,
+            })
+            .collect(),
+    ));
+    // Finished records by material % 4, and those of the member with its own material.
+    let mut seen = [0usize; 5];
+    for scene in 0..60 {
+        let n = 1 + rng.below(12);
+        let extent = 2.0 + 2.0 * (n as f64).cbrt();
+        let instances: Vec<Instance> = (0..n)
+            .map(|i| {
+                let (shape, xf) = if rng.chance(0.3) {
+                    let a = Affine64 {
+                        m: DMat3::from_diagonal(DVec3::splat(rng.range(0.2, 1.5))),
+                        d: rng.vec(-extent, extent),
+                    };
+                    (Shape::Sphere, Some(a))
+                } else {
+                    let shape = if rng.chance(0.3) {
+                        Shape::Group(group.clone())
+                    } else {
+                        random_shape(&mut rng, &mesh, &group)
+                    };
+                    (shape, Some(random_affine(&mut rng, extent, 1.0)))
+                };
+                Instance {
+                    shape,
+                    xf: xf.map(|a| Transform::new(&a).unwrap()),
+                    material: (i % 4) as u32,
+                    object_id: i as u32 + 1,
+                }
+            })
+            .collect();
+        let agg = Aggregate::new(instances);
+        for call in 0..60 {
+            let (ray, t_min, t_max) = random_ray(&mut rng, &agg, extent);
+            let alone = agg.intersect_for_shading(&ray, t_min, t_max);
+            for parity in 0..2 {
+                let mut h = Hit::default();
+                let got =
+                    agg.intersect_for_shading_if(&ray, t_min, t_max, &mut h, |m| m % 2 == parity);
+                let wanted = alone.map(|a| a.material % 2 == parity);
+                assert_eq!(
+                    got, wanted,
+                    "scene {scene}, call {call}, {ray:?} [{t_min}, {t_max}]: \
+                     intersect_for_shading_if (renderer/src/aggregate/mod.rs) reports {got:?} \
+                     where intersect_for_shading's hit {alone:?} says {wanted:?}: the winner's \
+                     material (Aggregate::material_of) is wrong"
+                );
+                if got == Some(true) {
+                    assert_eq!(
+                        hit_bits(&Some(h)),
+                        hit_bits(&alone),
+                        "scene {scene}, call {call}: intersect_for_shading_if finished another \
+                         record than intersect_for_shading's"
+                    );
+                }
+                if let (Some(a), Some(true)) = (alone, got) {
+                    seen[a.material as usize % 4] += 1;
+                    seen[4] += (a.material == 7) as usize;
+                }
+            }
+        }
+    }
+    assert!(
+        seen.iter().all(|&k| k > 20),
+        "every material, and the definition's member with its own, must be hit and wanted: \
+         {seen:?}"
+    );
+}
+
 /// The cylinder's edge cases in lanes (`Crossing` of shapes/cylinder.rs, lane by lane),
 /// each exactly as `intersect` decides it: rays along the axis (no side roots: a cap counts when the
 /// ray runs inside the radius, on it included), rays parallel to the caps (the slab is

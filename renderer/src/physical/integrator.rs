@@ -528,10 +528,18 @@ impl<'a> PhysicalIntegrator<'a> {
             }
             let (ray, t_min) = self.spawn.ray(s.p, s.err, rv(s.ng), rv(bs.dir));
             (origin, d) = (ray.o, ray.d);
-            found =
-                self.scene
-                    .root
-                    .intersect_for_shading_into(&ray, t_min, Real::INFINITY, &mut hit);
+            let root = &self.scene.root;
+            if depth + 1 >= max_depth {
+                // The next vertex is the last: it adds its emission and nothing else, so a
+                // hit on a material that emits nothing ends the path here.
+                let emits = |m: u32| self.scene.material(m).radiance != Color::ZERO;
+                match root.intersect_for_shading_if(&ray, t_min, Real::INFINITY, &mut hit, emits) {
+                    Some(false) => break,
+                    reached => found = reached.is_some(),
+                }
+            } else {
+                found = root.intersect_for_shading_into(&ray, t_min, Real::INFINITY, &mut hit);
+            }
         }
         l
     }
