@@ -949,13 +949,6 @@ impl Aggregate {
         self.bvh.node_bytes() + std::mem::size_of_val(self.leads.as_slice()) > INTERLEAVE_ABOVE
     }
 
-    /// Maps the winner of a search, bounded instance or not, to this space, and numbers
-    /// its surface. (In place, as the instance's and the shape's steps are: a record
-    /// passed by value was copied in and out at each, 75 instructions a ray here on the
-    /// peers bench's coherent rays, 41 now. Always inlined: as a call, its one-by-one
-    /// writes of the record's fields were read back by the caller's wide copy of the
-    /// record, a store-forwarding stall; inlined, path-traced scenes took 1.5–2 % less
-    /// time.)
     /// The material [`Aggregate::finish`] gives the record `h` of instance `k`: its own,
     /// or the instance's when it inherits (`Hit::inherit`).
     #[inline(always)]
@@ -969,6 +962,13 @@ impl Aggregate {
         }
     }
 
+    /// Maps the winner of a search, bounded instance or not, to this space, and numbers
+    /// its surface. (In place, as the instance's and the shape's steps are: a record
+    /// passed by value was copied in and out at each, 75 instructions a ray here on the
+    /// peers bench's coherent rays, 41 now. Always inlined: as a call, its one-by-one
+    /// writes of the record's fields were read back by the caller's wide copy of the
+    /// record, a store-forwarding stall; inlined, path-traced scenes took 1.5–2 % less
+    /// time.)
     #[inline(always)]
     fn finish<const UV: bool>(&self, k: usize, h: &mut Hit) {
         match self.leads.get(k) {
