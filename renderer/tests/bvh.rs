@@ -1418,9 +1418,10 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
 
 /// `Aggregate::intersect_for_shading_if`, the search for a path's last vertex, finds what
 /// `intersect_for_shading` finds, and finishes the record only when the hit's material is
-/// wanted: on scenes of every shape, meshes, definitions whose members have materials of
-/// their own or inherit the placing instance's, and spheres placed by a scale and a
-/// translation (the aggregate's leads, which keep their material apart), each ray is
+/// wanted: on scenes of the bounded shapes (`random_shape`), meshes, definitions whose
+/// members have materials of their own or inherit the placing instance's, spheres placed
+/// by a scale and a translation (the aggregate's leads, which keep their material apart),
+/// and a plane beside the tree (an unbounded instance, which has no lead), each ray is
 /// asked with the even materials wanted, then the odd ones.
 #[test]
 fn the_last_vertex_search_finishes_only_wanted_materials() {
@@ -1441,12 +1442,13 @@ fn the_last_vertex_search_finishes_only_wanted_materials() {
             })
             .collect(),
     ));
-    // Finished records by material % 4, and those of the member with its own material.
-    let mut seen = [0usize; 5];
+    // Finished records by material % 4, those of the member with its own material, and
+    // those of the plane.
+    let mut seen = [0usize; 6];
     for scene in 0..60 {
         let n = 1 + rng.below(12);
         let extent = 2.0 + 2.0 * (n as f64).cbrt();
-        let instances: Vec<Instance> = (0..n)
+        let mut instances: Vec<Instance> = (0..n)
             .map(|i| {
                 let (shape, xf) = if rng.chance(0.3) {
                     let a = Affine64 {
@@ -1470,6 +1472,19 @@ fn the_last_vertex_search_finishes_only_wanted_materials() {
                 }
             })
             .collect();
+        if scene % 3 == 0 {
+            // A plane beside the tree (unbounded: no lead), with a material of its own.
+            let a = Affine64 {
+                m: DMat3::from_quat(DQuat::from_axis_angle(rng.unit(), rng.range(0.0, 0.5))),
+                d: DVec3::new(0.0, -extent, 0.0),
+            };
+            instances.push(Instance {
+                shape: Shape::Plane,
+                xf: Some(Transform::new(&a).unwrap()),
+                material: 5,
+                object_id: 1_000_000,
+            });
+        }
         let agg = Aggregate::new(instances);
         for call in 0..60 {
             let (ray, t_min, t_max) = random_ray(&mut rng, &agg, extent);
@@ -1497,14 +1512,15 @@ fn the_last_vertex_search_finishes_only_wanted_materials() {
                 if let (Some(a), Some(true)) = (alone, got) {
                     seen[a.material as usize % 4] += 1;
                     seen[4] += (a.material == 7) as usize;
+                    seen[5] += (a.material == 5) as usize;
                 }
             }
         }
     }
     assert!(
         seen.iter().all(|&k| k > 20),
-        "every material, and the definition's member with its own, must be hit and wanted: \
-         {seen:?}"
+        "every material, the definition's member with its own and the plane must be hit and \
+         wanted: {seen:?}"
     );
 }
 
