@@ -110,12 +110,21 @@ impl Hit {
         self.n_shade = if flat { self.n_geo } else { map(self.n_shade) };
     }
 
+    /// The material this record has once it inherits `material` from an enclosing
+    /// instance: its own, unless it has none yet ([`INHERIT`]).
+    #[inline]
+    pub(crate) fn material_or(&self, material: u32) -> u32 {
+        if self.material == INHERIT {
+            material
+        } else {
+            self.material
+        }
+    }
+
     /// Fills in the material and object id still unassigned, from an enclosing instance.
     #[inline]
     pub(crate) fn inherit(&mut self, material: u32, object_id: u32) {
-        if self.material == INHERIT {
-            self.material = material;
-        }
+        self.material = self.material_or(material);
         if self.object_id == 0 {
             self.object_id = object_id;
         }

@@ -112,17 +112,7 @@ fn random_shape(rng: &mut SplitMix, mesh: &Arc<Mesh>, group: &Arc<Aggregate>) ->
 /// A scene of `n` bounded instances (object ids 1..=n), plus sometimes a plane.
 fn random_scene(rng: &mut SplitMix, n: usize, with_plane: bool) -> (Aggregate, f64) {
     let mesh = Arc::new(bumpy_sphere(8, 12, 3));
-    let group = Arc::new(Aggregate::new(
-        (0..3)
-            .map(|k| Instance {
-                shape: [Shape::Sphere, Shape::Cube, Shape::Cone { capped: true }][k].clone(),
-                xf: Some(Transform::new(&random_affine(rng, 1.0, 0.6)).unwrap()),
-                material: 0,
-                // 0: inherit the id of the instance that places the group.
-                object_id: 0,
-            })
-            .collect(),
-    ));
+    let group = small_group(rng, |_| 0);
     // Keep the density roughly constant.
     let extent = 2.0 + 2.0 * (n as f64).cbrt();
     let mut instances: Vec<Instance> = (0..n)
@@ -144,21 +134,41 @@ fn random_scene(rng: &mut SplitMix, n: usize, with_plane: bool) -> (Aggregate, f
     if with_plane {
         // Inserted somewhere in the middle so scene order is not special.
         let at = rng.below(instances.len() + 1);
-        let a = Affine64 {
-            m: DMat3::from_quat(DQuat::from_axis_angle(rng.unit(), rng.range(0.0, 0.5))),
-            d: DVec3::new(0.0, -extent, 0.0),
-        };
-        instances.insert(
-            at,
-            Instance {
-                shape: Shape::Plane,
-                xf: Some(Transform::new(&a).unwrap()),
-                material: 0,
-                object_id: 1_000_000,
-            },
-        );
+        let plane = tilted_plane(rng, extent, 0);
+        instances.insert(at, plane);
     }
     (Aggregate::new(instances), extent)
+}
+
+/// A definition of a sphere, a cube and a cone, each placed at random within a unit
+/// extent; member `k` has material `material(k)`. Object ids are 0: each member inherits
+/// the id of the instance that places the group.
+fn small_group(rng: &mut SplitMix, material: impl Fn(usize) -> u32) -> Arc<Aggregate> {
+    Arc::new(Aggregate::new(
+        (0..3)
+            .map(|k| Instance {
+                shape: [Shape::Sphere, Shape::Cube, Shape::Cone { capped: true }][k].clone(),
+                xf: Some(Transform::new(&random_affine(rng, 1.0, 0.6)).unwrap()),
+                material: material(k),
+                object_id: 0,
+            })
+            .collect(),
+    ))
+}
+
+/// A plane below the scene (`extent` down), slightly tilted at random: an unbounded
+/// instance, beside the tree; object id 1,000,000.
+fn tilted_plane(rng: &mut SplitMix, extent: f64, material: u32) -> Instance {
+    let a = Affine64 {
+        m: DMat3::from_quat(DQuat::from_axis_angle(rng.unit(), rng.range(0.0, 0.5))),
+        d: DVec3::new(0.0, -extent, 0.0),
+    };
+    Instance {
+        shape: Shape::Plane,
+        xf: Some(Transform::new(&a).unwrap()),
+        material,
+        object_id: 1_000_000,
+    }
 }
 
 /// A random ray and interval. Some directions have exactly zero components (of either
@@ -1427,21 +1437,14 @@ fn small_scenes_in_lanes_match_one_at_a_time() {
 fn the_last_vertex_search_finishes_only_wanted_materials() {
     let mut rng = SplitMix(2911);
     let mesh = Arc::new(bumpy_sphere(8, 12, 3));
-    let group = Arc::new(Aggregate::new(
-        (0..3)
-            .map(|k| Instance {
-                shape: [Shape::Sphere, Shape::Cube, Shape::Cone { capped: true }][k].clone(),
-                xf: Some(Transform::new(&random_affine(&mut rng, 1.0, 0.6)).unwrap()),
-                // The middle member has its own material; the others inherit.
-                material: if k == 1 {
-                    7
-                } else {
-                    renderer::aggregate::INHERIT
-                },
-                object_id: 0,
-            })
-            .collect(),
-    ));
+    // The middle member has its own material; the others inherit.
+    let group = small_group(&mut rng, |k| {
+        if k == 1 {
+            7
+        } else {
+            renderer::aggregate::INHERIT
+        }
+    });
     // Finished records by material % 4, those of the member with its own material, and
     // those of the plane.
     let mut seen = [0usize; 6];
@@ -1474,16 +1477,7 @@ fn the_last_vertex_search_finishes_only_wanted_materials() {
             .collect();
         if scene % 3 == 0 {
             // A plane beside the tree (unbounded: no lead), with a material of its own.
-            let a = Affine64 {
-                m: DMat3::from_quat(DQuat::from_axis_angle(rng.unit(), rng.range(0.0, 0.5))),
-                d: DVec3::new(0.0, -extent, 0.0),
-            };
-            instances.push(Instance {
-                shape: Shape::Plane,
-                xf: Some(Transform::new(&a).unwrap()),
-                material: 5,
-                object_id: 1_000_000,
-            });
+            instances.push(tilted_plane(&mut rng, extent, 5));
         }
         let agg = Aggregate::new(instances);
         for call in 0..60 {

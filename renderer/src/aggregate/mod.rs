@@ -950,16 +950,13 @@ impl Aggregate {
     }
 
     /// The material [`Aggregate::finish`] gives the record `h` of instance `k`: its own,
-    /// or the instance's when it inherits (`Hit::inherit`).
+    /// or the instance's (its lead's) when it inherits (`Hit::material_or`).
     #[inline(always)]
     fn material_of(&self, k: usize, h: &Hit) -> u32 {
-        if h.material != INHERIT {
-            return h.material;
-        }
-        match self.leads.get(k) {
+        h.material_or(match self.leads.get(k) {
             Some(lead) if lead.s != 0.0 => lead.material,
             _ => self.instances[k].material,
-        }
+        })
     }
 
     /// Maps the winner of a search, bounded instance or not, to this space, and numbers
