@@ -63,15 +63,22 @@ pub fn radius(pilot: u32) -> usize {
 /// No pixel takes more than this many times the average extra samples.
 pub const MAX_FACTOR: f64 = 64.0;
 
-/// Nor more extra samples than this (with the pilot, under 2³¹: render.rs's `SEQUENCE`).
+/// Nor more extra samples than this (with the pilot, under 2³¹: sampler.rs's `SEQUENCE`).
 pub const MAX_EXTRA: f64 = (1u32 << 30) as f64 - 1.0;
 
-/// The pilot's samples a pixel for a budget of `spp`: a quarter, at least 4; `None` (no
-/// adapting) below 8 a pixel. With fewer than 4 pilot samples the neighbours' variances
-/// miss too many noisy pixels (at 8 spp with a pilot of 2, the area-light scene's error
-/// was 2.8 times the plain render's).
+/// The fewest pilot samples a pixel: with fewer, the neighbours' variances miss too many
+/// noisy pixels (at 8 spp with a pilot of 2, the area-light scene's error was 2.8 times
+/// the plain render's).
+pub const MIN_PILOT: u32 = 4;
+
+/// The pilot's samples a pixel for a budget of `spp`: a quarter, at least [`MIN_PILOT`];
+/// `None` (no adapting) when that leaves nothing to share out, at 4 spp or fewer. From
+/// 5 spp, where the pilot is 4 and the rest one sample a pixel on average: with `sobol`
+/// at 5 to 7 spp the error was 0.17–0.59 of the plain render's at the same count in the
+/// Mitsuba comparison's scenes, where a pilot only from 8 spp left them the plain render
+/// (renderer/docs/performance.md, 2026-11-29).
 pub fn pilot(spp: u32) -> Option<u32> {
-    (spp >= 8).then_some((spp / 4).max(4))
+    (spp > MIN_PILOT).then_some((spp / 4).max(MIN_PILOT))
 }
 
 /// The variance of one sample, summed over R, G and B, from `n` samples' `sum` and their
@@ -268,8 +275,11 @@ mod tests {
     }
 
     #[test]
-    fn the_pilot_is_a_quarter_from_eight_samples() {
-        assert_eq!(pilot(7), None);
+    fn the_pilot_is_a_quarter_and_at_least_four_from_five_samples() {
+        assert_eq!(pilot(1), None);
+        assert_eq!(pilot(4), None);
+        assert_eq!(pilot(5), Some(4));
+        assert_eq!(pilot(7), Some(4));
         assert_eq!(pilot(8), Some(4));
         assert_eq!(pilot(16), Some(4));
         assert_eq!(pilot(258), Some(64));

@@ -10,7 +10,7 @@ pub use crate::progress::Progress;
 use crate::progress::Reporter;
 use crate::ray::Ray;
 use crate::real::{dvec3, Real, Vec3};
-use crate::sampler::PixelSampler;
+use crate::sampler::{PixelSampler, SEQUENCE};
 use crate::scene::Integrator;
 use crate::scene::{Color, Scene};
 use crate::shading::Shader;
@@ -333,11 +333,6 @@ impl Pass {
         ]
     }
 }
-
-/// The set an adaptive render's `independent` and `sobol` samples come from: a power of
-/// two above any pixel's count (the pilot is under 2³⁰, a quarter of a 32-bit budget,
-/// and adaptive.rs caps the rest at [`adaptive::MAX_EXTRA`]).
-pub const SEQUENCE: u32 = 1 << 31;
 
 /// The samples of each pixel of a row: the same count in every pixel, or one each. (One
 /// type, not a closure, so that the row loop is compiled once and the integrator inlined

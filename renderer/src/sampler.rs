@@ -9,10 +9,11 @@
 //!   (nested uniform scrambling, by a hash per (pixel, dimension): Burley 2020, "Practical
 //!   hash-based Owen scrambling", with Vegdahl's 2021 constants) and with the sample index
 //!   shuffled per dimension pair (Kollig and Keller 2002, "Efficient multidimensional
-//!   sampling"; at power-of-two counts by the same scrambling of the index's bits, read
-//!   from the top, as Burley does): low discrepancy in every pair of dimensions, and each
-//!   point uniformly random inside its elementary intervals, which a random XOR (a
-//!   digital shift) is not.
+//!   sampling"), by the same scrambling of the index's bits, read from the top, as Burley
+//!   does: low discrepancy in every pair of dimensions, and each point uniformly random
+//!   inside its elementary intervals, which a random XOR (a digital shift) is not. At a
+//!   power-of-two count the index runs over a set of that many; at any other count the
+//!   samples are the first of the shuffled sequence of [`SEQUENCE`].
 
 /// Which sampler places the samples.
 #[derive(
@@ -312,6 +313,13 @@ fn reverse32(v: u32) -> u32 {
     r(v) << 24 | r(v >> 8) << 16 | r(v >> 16) << 8 | r(v >> 24)
 }
 
+/// The sequence that the `sobol` sampler's samples at a count that is not a power of two
+/// are the first of, and that an adaptive render's `independent` and `sobol` samples
+/// come from (render.rs's `Pass::adaptive`): a power of two above any pixel's count (the
+/// pilot is under 2³⁰, a quarter of a 32-bit budget, and adaptive.rs caps the rest at
+/// [`crate::adaptive::MAX_EXTRA`]).
+pub const SEQUENCE: u32 = 1 << 31;
+
 /// The samples of one pixel sample: call [`PixelSampler::next_2d`] and
 /// [`PixelSampler::next_1d`] in a fixed order per path.
 #[derive(Clone, Debug)]
@@ -323,9 +331,12 @@ pub struct PixelSampler {
     /// sample) that each dimension finishes with one more mix (the same bits as
     /// [`uniform`]).
     sample_mix: u64,
-    /// For the sobol sampler at a power-of-two count, the sample index with its bits
-    /// reversed: what [`PixelSampler::sobol_index`] shuffles.
+    /// For the sobol sampler, the sample index with its bits reversed: what
+    /// [`PixelSampler::sobol_index`] shuffles.
     sample_rev: u32,
+    /// For the sobol sampler, the mask of the set the shuffled index runs over: `spp − 1`
+    /// at a power-of-two count, else `SEQUENCE − 1`.
+    sobol_mask: u32,
     sample: u32,
     spp: u32,
     dim: u32,
@@ -352,6 +363,7 @@ impl PixelSampler {
                 0
             },
             sample_rev: reverse32(sample),
+            sobol_mask: if spp.is_power_of_two() { spp } else { SEQUENCE } - 1,
             sample,
             spp,
             dim: 0,
@@ -377,20 +389,24 @@ impl PixelSampler {
 
     /// The Sobol index of this sample in the dimensions keyed by `seed`: the sample index
     /// shuffled (Kollig and Keller), so that each pair of dimensions pairs the samples
-    /// differently. At a power-of-two count the shuffle is Owen's scrambling of the
-    /// index's bits read from the top (Burley 2020, section 4: `owen_reversed` of the
-    /// reversed index): every bit flips as a function of the bits above it, so the low
-    /// `m` bits of the result run over `0..2^m` once, and the first of them, which sets a
-    /// point's first digit, depends on all of them (a scrambling read from the bottom would
-    /// flip it by a constant, and every pair of dimensions would share their first digit).
-    /// Otherwise it is [`permute`].
+    /// differently, by Owen's scrambling of the index's bits read from the top (Burley
+    /// 2020, section 4: `owen_reversed` of the reversed index). Every bit flips as a
+    /// function of the bits above it, so the low `m` bits of the result run over `0..2^m`
+    /// once for the first `2^m` samples, and the first of them, which sets a point's first
+    /// digit, depends on all of them (a scrambling read from the bottom would flip it by a
+    /// constant, and every pair of dimensions would share their first digit). At a
+    /// power-of-two count `n` the index is kept to `0..n`: the samples are a
+    /// (0, m, 2)-net in every pair. At any other count it runs over [`SEQUENCE`]: the
+    /// samples are the first of that shuffled sequence, whose prefixes of `2^m` samples are
+    /// such nets, and a render of a count has the samples of every smaller one that is not
+    /// a power of two, as the adaptive render's pilot and rest are one sequence. (Kensler's
+    /// permutation of the first `n` indices, used here before, gave the same error at the
+    /// same count in the Mitsuba comparison's scenes and cost more: a hash of a dozen
+    /// multiplications, walked again with the chance `1 − n/2^⌈log₂ n⌉`; performance.md,
+    /// 2026-11-29.)
     #[inline(always)]
     fn sobol_index(&self, seed: u32) -> u32 {
-        if self.spp.is_power_of_two() {
-            owen_reversed(self.sample_rev, seed) & (self.spp - 1)
-        } else {
-            permute(self.sample, self.spp, seed)
-        }
+        owen_reversed(self.sample_rev, seed) & self.sobol_mask
     }
 
     /// The dimensions drawn so far.
@@ -463,9 +479,14 @@ mod tests {
     /// The numbers each call position of a path gets, over all samples of one pixel: a
     /// path asks for a 2D point, a 1D number, two more 2D points and two more 1D numbers.
     fn dimensions(kind: SamplerKind, pixel: u64, spp: u32) -> Vec<Vec<f64>> {
+        dimensions_of(kind, pixel, spp, spp)
+    }
+
+    /// [`dimensions`] over the first `samples` samples of a set of `set`.
+    fn dimensions_of(kind: SamplerKind, pixel: u64, samples: u32, set: u32) -> Vec<Vec<f64>> {
         let mut dims = vec![Vec::new(); 9];
-        for s in 0..spp {
-            let mut smp = PixelSampler::new(kind, pixel, s, spp);
+        for s in 0..samples {
+            let mut smp = PixelSampler::new(kind, pixel, s, set);
             let (a, b) = smp.next_2d();
             let c = smp.next_1d();
             let (d, e) = smp.next_2d();
@@ -477,6 +498,54 @@ mod tests {
             }
         }
         dims
+    }
+
+    /// That the first `2^m` samples of `dims` are a (0, m, 2)-net in every pair of call
+    /// positions that is a 2D point: each box of `2^a × 2^(m − a)` holds one point.
+    fn assert_nets(dims: &[Vec<f64>], m: u32, what: &str) {
+        let n = 1usize << m;
+        for (x, y) in TWO_D {
+            for a in 0..=m {
+                let (nx, ny) = (1usize << a, 1usize << (m - a));
+                let mut seen = vec![0u32; n];
+                for s in 0..n {
+                    let cx = (dims[x][s] * nx as f64) as usize;
+                    let cy = (dims[y][s] * ny as f64) as usize;
+                    seen[cy * nx + cx] += 1;
+                }
+                assert!(
+                    seen.iter().all(|&c| c == 1),
+                    "{what}, call positions ({x}, {y}), the first {n} samples: boxes of \
+                     {nx} x {ny} hold {seen:?} points (one each expected: the scrambling \
+                     must keep the (0, m, 2)-net; renderer/src/sampler.rs owen_reversed, \
+                     PixelSampler::sobol_index)"
+                );
+            }
+        }
+    }
+
+    /// At a count that is not a power of two, the sobol sampler's samples are the first of
+    /// the shuffled sequence of `SEQUENCE`: the numbers of a sampler over that whole set
+    /// (an adaptive render's), so that the first `2^m` of them, for the largest `2^m`
+    /// under the count, are a (0, m, 2)-net in every pair.
+    #[test]
+    fn sobol_at_other_counts_is_the_start_of_its_sequence() {
+        for spp in [3u32, 5, 6, 7, 12, 13, 100] {
+            for pixel in [0u64, 3, 99991, u64::MAX] {
+                let dims = dimensions(SamplerKind::Sobol, pixel, spp);
+                assert_eq!(
+                    dims,
+                    dimensions_of(SamplerKind::Sobol, pixel, spp, SEQUENCE),
+                    "Sobol, {spp} spp, pixel {pixel}: not the first {spp} samples of the \
+                     sequence of SEQUENCE (renderer/src/sampler.rs PixelSampler::sobol_index)"
+                );
+                assert_nets(
+                    &dims,
+                    spp.ilog2(),
+                    &format!("Sobol, {spp} spp, pixel {pixel}"),
+                );
+            }
+        }
     }
 
     /// Call positions of [`dimensions`] that are 1D numbers, and the pairs that are 2D points.
@@ -551,23 +620,7 @@ mod tests {
             let spp = 1u32 << m;
             for pixel in [0u64, 3, 99991, u64::MAX] {
                 let dims = dimensions(SamplerKind::Sobol, pixel, spp);
-                for (x, y) in TWO_D {
-                    for a in 0..=m {
-                        let (nx, ny) = (1usize << a, 1usize << (m - a));
-                        let mut seen = vec![0u32; spp as usize];
-                        for s in 0..spp as usize {
-                            let cx = (dims[x][s] * nx as f64) as usize;
-                            let cy = (dims[y][s] * ny as f64) as usize;
-                            seen[cy * nx + cx] += 1;
-                        }
-                        assert!(
-                            seen.iter().all(|&c| c == 1),
-                            "Sobol, {spp} spp, pixel {pixel}, call positions ({x}, {y}): boxes \
-                             of {nx} x {ny} hold {seen:?} points (one each expected: the \
-                             scrambling must keep the (0, m, 2)-net; renderer/src/sampler.rs owen_reversed)"
-                        );
-                    }
-                }
+                assert_nets(&dims, m, &format!("Sobol, {spp} spp, pixel {pixel}"));
                 if spp >= 4 {
                     for k in ONE_D.into_iter().chain(TWO_D.into_iter().map(|(x, _)| x)) {
                         let mut offsets: Vec<f64> =

@@ -155,7 +155,7 @@ fn check_adaptive(file: &str, spp: u32, sampler: SamplerKind) {
     let (pass0, pass1) = if scene.settings.sampler == SamplerKind::Stratified {
         ((0, 0, None), ((w * h) as u64, 0, None))
     } else {
-        let set = Some(renderer::render::SEQUENCE);
+        let set = Some(renderer::sampler::SEQUENCE);
         ((0, 0, set), (0, pilot, set))
     };
     let first: Vec<_> = (0..w * h)
