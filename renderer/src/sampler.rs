@@ -362,7 +362,13 @@ impl PixelSampler {
             } else {
                 0
             },
-            sample_rev: reverse32(sample),
+            // Only the sobol sampler reads these (the reversal for every sampler cost a
+            // same-algorithm `direct` render, bench_mixed_lights, 0.6 % more instructions).
+            sample_rev: if kind == SamplerKind::Sobol {
+                reverse32(sample)
+            } else {
+                0
+            },
             sobol_mask: if spp.is_power_of_two() { spp } else { SEQUENCE } - 1,
             sample,
             spp,
