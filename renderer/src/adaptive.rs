@@ -33,6 +33,7 @@
 //! caustic, a soft shadow's penumbra), which is what makes the neighbours a good guess.
 
 use crate::material::Color;
+use rayon::prelude::*;
 
 /// The share of the extra samples spread evenly over all pixels, so a pixel whose
 /// neighbours' pilots happened to show no noise (a caustic that no pilot path found)
@@ -136,6 +137,7 @@ pub fn extra_counts(
     let outside = Outside::new(w, h, r, &score);
     let extra = extra as f64;
     (0..w * h)
+        .into_par_iter()
         .map(|p| {
             let (i, j) = (p % w, p / w);
             let rest = w * h - block(i, j, w, h, r).count();
@@ -168,13 +170,17 @@ pub fn extra_counts(
 pub(crate) fn scores(w: usize, h: usize, r: usize, variance: &[f64], cost: &[f64]) -> Vec<f64> {
     assert_eq!(variance.len(), w * h, "one variance a pixel");
     assert_eq!(cost.len(), w * h, "one cost a pixel");
+    // Each pixel's standard deviation once: a block reads it for each of its 8 or 24
+    // neighbours.
+    let deviation: Vec<f64> = variance.par_iter().map(|v| v.sqrt()).collect();
     (0..w * h)
+        .into_par_iter()
         .map(|p| {
             let (i, j) = (p % w, p / w);
             let (mut sd, mut c, mut n) = (0.0, 0.0, 0u32);
             for (a, b) in block(i, j, w, h, r) {
                 if (a, b) != (i, j) {
-                    sd += variance[b * w + a].sqrt();
+                    sd += deviation[b * w + a];
                     c += cost[b * w + a];
                     n += 1;
                 }
