@@ -314,7 +314,7 @@ fn reverse32(v: u32) -> u32 {
 }
 
 /// The sequence that the `sobol` sampler's samples at a count that is not a power of two
-/// are the first of, and that an adaptive render's `independent` and `sobol` samples
+/// (and under it) are the first of, and that an adaptive render's `independent` and `sobol` samples
 /// come from (render.rs's `Pass::adaptive`): a power of two above any pixel's count (the
 /// pilot is under 2³⁰, a quarter of a 32-bit budget, and adaptive.rs caps the rest at
 /// [`crate::adaptive::MAX_EXTRA`]).
@@ -335,7 +335,7 @@ pub struct PixelSampler {
     /// [`PixelSampler::sobol_index`] shuffles.
     sample_rev: u32,
     /// For the sobol sampler, the mask of the set the shuffled index runs over: `spp − 1`
-    /// at a power-of-two count, else `SEQUENCE − 1`.
+    /// at a power-of-two count, else `SEQUENCE − 1` (every bit above `SEQUENCE`).
     sobol_mask: u32,
     sample: u32,
     spp: u32,
@@ -362,14 +362,20 @@ impl PixelSampler {
             } else {
                 0
             },
-            // Only the sobol sampler reads these (the reversal for every sampler cost a
+            // Only the sobol sampler reads this (the reversal for every sampler cost a
             // same-algorithm `direct` render, bench_mixed_lights, 0.6 % more instructions).
             sample_rev: if kind == SamplerKind::Sobol {
                 reverse32(sample)
             } else {
                 0
             },
-            sobol_mask: if spp.is_power_of_two() { spp } else { SEQUENCE } - 1,
+            sobol_mask: match spp {
+                n if n.is_power_of_two() => n - 1,
+                n if n < SEQUENCE => SEQUENCE - 1,
+                // A count past the sequence (which no scene needs) takes the whole index,
+                // so that no two samples share one.
+                _ => u32::MAX,
+            },
             sample,
             spp,
             dim: 0,
@@ -553,6 +559,43 @@ mod tests {
             }
         }
     }
+
+    /// The sobol sampler's first 2D point at a count that is not a power of two, and at
+    /// one sample: the twelve samples at 12 spp of pixels 77 to 92, folded into one hash,
+    /// and sample 0 of pixel 77 at 1 spp (index 0), as 32-bit fractions. The twelve are
+    /// the start of the sequence of `SEQUENCE`, whose size they pin: their indices' high
+    /// bits are a pixel's random constant, so sixteen pixels hold one with the bit of 2³⁰
+    /// (a smaller sequence would change it). Past the sequence the index keeps every bit,
+    /// so that no two samples share one (`owen_reversed` is a bijection).
+    #[test]
+    fn sobol_numbers_at_other_counts_are_pinned() {
+        let first = |pixel: u64, sample: u32, spp: u32| {
+            let (x, y) = PixelSampler::new(SamplerKind::Sobol, pixel, sample, spp).next_2d();
+            ((x * 4_294_967_296.0) as u32, (y * 4_294_967_296.0) as u32)
+        };
+        let twelve = (77..93)
+            .flat_map(|p| (0..12).map(move |k| (p, k)))
+            .fold(0u64, |h, (p, k)| {
+                let (x, y) = first(p, k, 12);
+                mix64(h ^ (u64::from(x) << 32 | u64::from(y)))
+            });
+        assert_eq!(
+            (twelve, first(77, 0, 1)),
+            PINNED_SOBOL_OTHER,
+            "the sobol sampler's numbers at 12 and 1 spp changed (renderer/src/sampler.rs \
+             PixelSampler::sobol_index, SEQUENCE)"
+        );
+        let past = PixelSampler::new(SamplerKind::Sobol, 77, 5, 3 << 30);
+        assert_eq!(
+            past.sobol_mask,
+            u32::MAX,
+            "past SEQUENCE the sobol index must keep every bit (renderer/src/sampler.rs \
+             PixelSampler::new)"
+        );
+    }
+
+    const PINNED_SOBOL_OTHER: (u64, (u32, u32)) =
+        (9_332_942_466_393_206_496, (3_581_947_067, 3_046_843_313));
 
     /// Call positions of [`dimensions`] that are 1D numbers, and the pairs that are 2D points.
     const ONE_D: [usize; 3] = [2, 7, 8];
