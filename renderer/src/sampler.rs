@@ -313,11 +313,11 @@ fn reverse32(v: u32) -> u32 {
     r(v) << 24 | r(v >> 8) << 16 | r(v >> 16) << 8 | r(v >> 24)
 }
 
-/// The sequence that the `sobol` sampler's samples at a count that is not a power of two
-/// (and under it) are the first of, and that an adaptive render's `independent` and `sobol` samples
-/// come from (render.rs's `Pass::adaptive`): a power of two above any pixel's count (the
-/// pilot is under 2³⁰, a quarter of a 32-bit budget, and adaptive.rs caps the rest at
-/// [`crate::adaptive::MAX_EXTRA`]).
+/// The sequence whose first samples the `sobol` sampler takes at a count under it that is
+/// not a power of two, and that an adaptive render's `independent` and `sobol` samples
+/// come from (render.rs's `Pass::adaptive`): a power of two above any adaptive pixel's
+/// count (the pilot is under 2³⁰, a quarter of a 32-bit budget, and adaptive.rs caps the
+/// rest at [`crate::adaptive::MAX_EXTRA`]).
 pub const SEQUENCE: u32 = 1 << 31;
 
 /// The samples of one pixel sample: call [`PixelSampler::next_2d`] and
@@ -335,7 +335,7 @@ pub struct PixelSampler {
     /// [`PixelSampler::sobol_index`] shuffles.
     sample_rev: u32,
     /// For the sobol sampler, the mask of the set the shuffled index runs over: `spp − 1`
-    /// at a power-of-two count, else `SEQUENCE − 1` (every bit above `SEQUENCE`).
+    /// at a power-of-two count, else `SEQUENCE − 1` under `SEQUENCE`, and every bit past it.
     sobol_mask: u32,
     sample: u32,
     spp: u32,
