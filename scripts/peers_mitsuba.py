@@ -79,21 +79,21 @@ def crossing(pts, target):
 
 
 def refine(pts, target, measure, counts_between, rounds=8):
-    """The error ladder `pts` [(spp, error)] with the counts next to its crossing of
-    `target` measured too, ascending. The log-log line between two ladder counts is a
-    model, and a poor one where a sampler changes its regime between them: our adaptive
-    sampling has no pilot below 5 spp (8 before 2026-11-29) and renders every pixel alike, so its 4-spp error
-    lies on the plain sampler's curve and its 16-spp error on the adaptive one's, and the
-    line between them put the Cornell box's crossing at 14.6 spp where renders at 13 and
-    14 spp measured it at 13.5. Each round takes the two measured counts around the
-    crossing (0 below the first) and measures, among the counts the sampler can take
-    strictly between them, the nearest on either side of the crossing; it stops when none
-    is left, so the crossing ends between two neighbouring counts the sampler can take, or
-    after `rounds` rounds (a non-monotonic ladder, as `sobol` at counts that are not powers
-    of two gives, can leave a wider bracket). A crossing beyond the ladder's last count is left
-    extrapolated. `measure(spp)` renders at `spp` and returns (the count taken, error);
-    `counts_between(lo, hi)` lists the counts to ask for whose taken counts lie strictly
-    between lo and hi, ascending by the count taken."""
+    """The error ladder `pts` [(spp, error)] with the counts next to its crossing of `target`
+    measured too, ascending. The log-log line between two ladder counts is a model, and a
+    poor one where a sampler changes its regime between them: our adaptive sampling had no
+    pilot below 8 spp before 2026-11-29 (now below 3) and rendered every pixel alike there,
+    so its 4-spp error lay on the plain sampler's curve and its 16-spp error on the adaptive
+    one's, and the line between them put the Cornell box's crossing at 14.6 spp where
+    renders at 13 and 14 spp measured it at 13.5. Each round takes the two measured counts
+    around the crossing (0 below the first) and measures, among the counts the sampler can
+    take strictly between them, the nearest on either side of the crossing; it stops when
+    none is left, so the crossing ends between two neighbouring counts the sampler can take,
+    or after `rounds` rounds (a non-monotonic ladder, as `sobol` at counts that are not
+    powers of two gives, can leave a wider bracket). A crossing beyond the ladder's last
+    count is left extrapolated. `measure(spp)` renders at `spp` and returns (the count
+    taken, error); `counts_between(lo, hi)` lists the counts to ask for whose taken counts
+    lie strictly between lo and hi, ascending by the count taken."""
     pts = sorted(pts)
     for _ in range(rounds):
         spp = crossing(pts, target)

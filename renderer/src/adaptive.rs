@@ -68,19 +68,26 @@ pub const MAX_FACTOR: f64 = 64.0;
 /// Nor more extra samples than this (with the pilot, under 2³¹: sampler.rs's `SEQUENCE`).
 pub const MAX_EXTRA: f64 = (1u32 << 30) as f64 - 1.0;
 
-/// The fewest pilot samples a pixel: with fewer, the neighbours' variances miss too many
-/// noisy pixels (at 8 spp with a pilot of 2, the area-light scene's error was 2.8 times
-/// the plain render's).
+/// The fewest pilot samples a pixel: two, the fewest that give a variance.
+pub const LEAST_PILOT: u32 = 2;
+
+/// The pilot's floor from 6 spp on: with fewer, the neighbours' variances miss noisy
+/// pixels that a small bright light lights (at 6 and 7 spp, eight seeds, a pilot of 3 had
+/// 1.29 and 1.45 times the RMSE of a pilot of 4 on mi_sphere_light; at 8 spp with a pilot
+/// of 2, the area-light scene's error was 2.8 times the plain render's).
 pub const MIN_PILOT: u32 = 4;
 
 /// The pilot's samples a pixel for a budget of `spp`: a quarter, at least [`MIN_PILOT`];
-/// `None` (no adapting) when that leaves nothing to share out, at 4 spp or fewer. From
-/// 5 spp, where the pilot is 4 and the rest one sample a pixel on average: with `sobol`
-/// at 5 to 7 spp the error was 0.17–0.59 of the plain render's at the same count in the
-/// Mitsuba comparison's scenes, where a pilot only from 8 spp left them the plain render
-/// (renderer/docs/performance.md, 2026-11-29).
+/// below 6 spp, where a pilot of 4 leaves less than two samples a pixel to share out,
+/// the budget less two, at least [`LEAST_PILOT`] (3 spp: 2 and one more on average; 4: 2
+/// and 2; 5: 3 and 2). `None` (no adapting) at 2 spp or fewer. Chosen on eight Mitsuba
+/// scenes that no bench times, `sobol`, 256², eight seeds: at 4 spp a pilot of 2 had
+/// 0.23–0.92 of the plain render's RMSE, less than a pilot of 3 on seven of them; at 5
+/// spp a pilot of 3 had 0.77–0.98 of a pilot of 4's (a pilot of 2 up to 1.03); at 6 spp
+/// a pilot of 4 was the best on the sphere light by far (renderer/docs/performance.md,
+/// "Adaptive sampling from 3 spp").
 pub fn pilot(spp: u32) -> Option<u32> {
-    (spp > MIN_PILOT).then_some((spp / 4).max(MIN_PILOT))
+    (spp > LEAST_PILOT).then(|| (spp / 4).max((spp - 2).clamp(LEAST_PILOT, MIN_PILOT)))
 }
 
 /// The variance of one sample, summed over R, G and B, from `n` samples' `sum` and their
@@ -324,10 +331,14 @@ mod tests {
     }
 
     #[test]
-    fn the_pilot_is_a_quarter_and_at_least_four_from_five_samples() {
+    fn the_pilot_is_a_quarter_and_at_least_four_from_six_samples_and_two_from_three() {
+        assert_eq!(pilot(0), None);
         assert_eq!(pilot(1), None);
-        assert_eq!(pilot(4), None);
-        assert_eq!(pilot(5), Some(4));
+        assert_eq!(pilot(2), None);
+        assert_eq!(pilot(3), Some(2));
+        assert_eq!(pilot(4), Some(2));
+        assert_eq!(pilot(5), Some(3));
+        assert_eq!(pilot(6), Some(4));
         assert_eq!(pilot(7), Some(4));
         assert_eq!(pilot(8), Some(4));
         assert_eq!(pilot(16), Some(4));

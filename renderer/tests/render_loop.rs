@@ -207,8 +207,11 @@ fn physical_render_matches_one_sample_at_a_time() {
 fn adaptive_render_matches_its_definition() {
     let area = "../conformance/scenes/mitsuba/mi_area_soft_shadow.toml";
     check_adaptive(area, 9, SamplerKind::Sobol);
-    // The smallest budget that adapts: a pilot of 4, one more sample a pixel on average.
+    // The smallest budgets that adapt: a pilot of 2 and one more sample a pixel on
+    // average (neighbourhoods of radius 3), a pilot of 3 and two more.
+    check_adaptive(area, 3, SamplerKind::Sobol);
     check_adaptive(area, 5, SamplerKind::Sobol);
+    check_adaptive(area, 4, SamplerKind::Stratified);
     check_adaptive(area, 12, SamplerKind::Stratified);
     check_adaptive(area, 8, SamplerKind::Independent);
     check_adaptive("scenes/hierarchy.toml", 8, SamplerKind::Sobol);
