@@ -73,22 +73,23 @@ pub const MAX_EXTRA: f64 = (1u32 << 30) as f64 - 1.0;
 pub const LEAST_PILOT: u32 = 2;
 
 /// The pilot's floor from 6 spp on: with fewer, the neighbours' variances miss noisy
-/// pixels that a small bright light lights (at 6 and 7 spp, eight seeds, a pilot of 3 had
-/// 1.29 and 1.45 times the RMSE of a pilot of 4 on mi_sphere_light; at 8 spp with a pilot
-/// of 2, the area-light scene's error was 2.8 times the plain render's).
+/// pixels that a small bright light lights (mi_sphere_light at 6 and 7 spp: a pilot of 3
+/// had 1.29 and 1.45 times the RMSE of a pilot of 4; renderer/docs/performance.md).
 pub const MIN_PILOT: u32 = 4;
 
 /// The pilot's samples a pixel for a budget of `spp`: a quarter, at least [`MIN_PILOT`];
-/// below 6 spp, where a pilot of 4 leaves less than two samples a pixel to share out,
-/// the budget less two, at least [`LEAST_PILOT`] (3 spp: 2 and one more on average; 4: 2
-/// and 2; 5: 3 and 2). `None` (no adapting) at 2 spp or fewer. Chosen on eight Mitsuba
-/// scenes that no bench times, `sobol`, 256², eight seeds: at 4 spp a pilot of 2 had
-/// 0.23–0.92 of the plain render's RMSE, less than a pilot of 3 on seven of them; at 5
-/// spp a pilot of 3 had 0.77–0.98 of a pilot of 4's (a pilot of 2 up to 1.03); at 6 spp
-/// a pilot of 4 was the best on the sphere light by far (renderer/docs/performance.md,
-/// "Adaptive sampling from 3 spp").
+/// below 6 spp, where a pilot of 4 would leave under two samples a pixel to share out, the
+/// budget less two, at least [`LEAST_PILOT`] (3 spp: 2 and one more on average; 4: 2 and 2;
+/// 5: 3 and 2). `None` (no adapting) at 2 spp or fewer. Chosen on eight Mitsuba scenes that
+/// no bench times (renderer/docs/performance.md, "Adaptive sampling from 3 spp"): at 4
+/// spp a pilot of 2 had 0.23–0.91 of the plain render's RMSE, less than a pilot of 3 on
+/// seven of them; at 5 spp a pilot of 3 had 0.77–0.98 of a pilot of 4's.
 pub fn pilot(spp: u32) -> Option<u32> {
-    (spp > LEAST_PILOT).then(|| (spp / 4).max((spp - 2).clamp(LEAST_PILOT, MIN_PILOT)))
+    match spp {
+        0..=2 => None,
+        3..=5 => Some((spp - 2).max(LEAST_PILOT)),
+        _ => Some((spp / 4).max(MIN_PILOT)),
+    }
 }
 
 /// The variance of one sample, summed over R, G and B, from `n` samples' `sum` and their
@@ -180,8 +181,9 @@ pub(crate) fn scores(w: usize, h: usize, r: usize, variance: &[f64], cost: &[f64
     assert_eq!(variance.len(), w * h, "one variance a pixel");
     assert_eq!(cost.len(), w * h, "one cost a pixel");
     // Each pixel's standard deviation, taken once, beside its cost: a block reads the
-    // pair for each of its 8 to 48 neighbours and adds both up in one two-lane addition
-    // (each lane its own sum, in the same order: the same bits as two scalar sums).
+    // pair for each of its 8 to 48 neighbours and adds it up as one pair, each lane its own
+    // sum in the same order (the same bits as two sums; 8 bytes a pixel more than the
+    // deviations alone, for the step between the passes).
     let pairs: Vec<DVec2> = variance
         .par_iter()
         .zip(cost)
@@ -192,21 +194,19 @@ pub(crate) fn scores(w: usize, h: usize, r: usize, variance: &[f64], cost: &[f64
         .map(|p| {
             let (i, j) = (p % w, p / w);
             let block = Block::new(i, j, w, h, r);
-            // Row by row, left to right, the pixel itself left out (its row in two runs,
-            // the one sum in the same order): slices of the rows, where an iterator over
-            // the block's pixels that tested each against the pixel took 8 % of the
-            // instructions of an adaptive 3-spp render (bench_mixed_lights), and two
-            // zipped slices a further 11 % of an adaptive 4-spp one (mi_area_soft_shadow).
+            // Row by row, left to right, the pixel itself left out (its own row in two
+            // runs): the order of the sums the counts were measured with, so the same bits
+            // (renderer/docs/performance.md, 2026-11-29).
             let mut sum = DVec2::ZERO;
             for b in block.rows.clone() {
-                let at = b * w;
+                let row = &pairs[b * w..(b + 1) * w];
                 let runs = if b == j {
                     [block.cols.start..i, i + 1..block.cols.end]
                 } else {
                     [block.cols.clone(), 0..0]
                 };
                 for run in runs {
-                    for x in &pairs[at + run.start..at + run.end] {
+                    for x in &row[run] {
                         sum += *x;
                     }
                 }
@@ -343,6 +343,7 @@ mod tests {
         assert_eq!(pilot(5), Some(3));
         assert_eq!(pilot(6), Some(4));
         assert_eq!(pilot(7), Some(4));
+        assert_eq!(pilot(u32::MAX), Some(u32::MAX / 4));
         assert_eq!(pilot(8), Some(4));
         assert_eq!(pilot(16), Some(4));
         assert_eq!(pilot(258), Some(64));
@@ -361,19 +362,19 @@ mod tests {
     #[test]
     fn a_pixels_count_does_not_read_its_own_pilot() {
         // Large enough that the spike's neighbourhood is a small part of the image.
-        let (w, h) = (15, 13);
+        let (w, h, x, y) = (31, 27, 15, 13);
         let cost = vec![1.0; w * h];
-        for r in 1..=2 {
-            let quiet = extra_counts(w, h, r, &spike(w, h, 7, 6, 0.01), &cost, 12);
-            let loud = extra_counts(w, h, r, &spike(w, h, 7, 6, 1e4), &cost, 12);
+        for r in 1..=3 {
+            let quiet = extra_counts(w, h, r, &spike(w, h, x, y, 0.01), &cost, 12);
+            let loud = extra_counts(w, h, r, &spike(w, h, x, y, 1e4), &cost, 12);
             let mut costly = cost.clone();
-            costly[6 * w + 7] = 50.0;
-            let dear = extra_counts(w, h, r, &spike(w, h, 7, 6, 0.01), &costly, 12);
+            costly[y * w + x] = 50.0;
+            let dear = extra_counts(w, h, r, &spike(w, h, x, y, 0.01), &costly, 12);
             // The noisy pixel's own count is the same; its neighbours' counts rise, and
             // fall when the pixel is dear.
-            assert_eq!(quiet[6 * w + 7], loud[6 * w + 7], "radius {r}");
-            assert_eq!(quiet[6 * w + 7], dear[6 * w + 7], "radius {r}");
-            for (a, b) in block(7, 6, w, h, r).filter(|&q| q != (7, 6)) {
+            assert_eq!(quiet[y * w + x], loud[y * w + x], "radius {r}");
+            assert_eq!(quiet[y * w + x], dear[y * w + x], "radius {r}");
+            for (a, b) in block(x, y, w, h, r).filter(|&q| q != (x, y)) {
                 let p = b * w + a;
                 assert!(
                     loud[p] > 4 * quiet[p],
@@ -391,7 +392,7 @@ mod tests {
             // A pixel outside the block is not the spike's neighbour: its count does
             // not rise.
             assert!(
-                loud[(6 * w + 7) - r - 1] <= quiet[(6 * w + 7) - r - 1],
+                loud[(y * w + x) - r - 1] <= quiet[(y * w + x) - r - 1],
                 "radius {r}"
             );
         }
@@ -417,6 +418,9 @@ mod tests {
         assert_eq!(radius(8), 1);
         assert_eq!(radius(64), 1);
         assert_eq!(radius(1), 4);
+        // The smallest pilots: 2 reads the 48 of its 7 x 7 block, 3 the 24 of its 5 x 5.
+        assert_eq!(radius(2), 3);
+        assert_eq!(radius(3), 2);
         for pilot in 1..100 {
             let r = radius(pilot) as u32;
             assert!(((2 * r + 1).pow(2) - 1) * pilot >= NEIGHBOURHOOD_SAMPLES);
@@ -462,7 +466,7 @@ mod tests {
     fn outside_sums_leave_the_block_out() {
         let (w, h) = (7, 5);
         let score: Vec<f64> = (0..w * h).map(|p| (p * p % 13) as f64 + 0.5).collect();
-        for r in 1..=2 {
+        for r in 1..=3 {
             let outside = Outside::new(w, h, r, &score);
             for j in 0..h {
                 for i in 0..w {
@@ -476,7 +480,7 @@ mod tests {
             }
             // Changing a score inside the block leaves the sum's bits as they were.
             let mut other = score.clone();
-            other[(2 + r) * w + 3 + r] = 1e17;
+            other[(2 + r).min(h - 1) * w + (3 + r).min(w - 1)] = 1e17;
             assert_eq!(
                 Outside::new(w, h, r, &other).sum(3, 2).to_bits(),
                 outside.sum(3, 2).to_bits(),
@@ -512,30 +516,36 @@ mod tests {
     fn scores_add_the_neighbours_up_row_by_row() {
         // Each score's bits are those of the neighbours' sums taken row by row, left to
         // right, the pixel itself left out: the order the adaptive counts were measured
-        // with (a change of order changes some counts, and so the image).
-        let (w, h) = (11, 9);
-        let var: Vec<f64> = (0..w * h)
-            .map(|p| ((p * 7919) % 101) as f64 / 7.0 + 1e-3)
-            .collect();
-        let cost: Vec<f64> = (0..w * h)
-            .map(|p| 1.0 + ((p * 31) % 13) as f64 / 3.0)
-            .collect();
-        for r in 1..=4 {
-            let got = scores(w, h, r, &var, &cost);
-            for p in 0..w * h {
-                let (i, j) = (p % w, p / w);
-                let (mut sd, mut c, mut n) = (0.0, 0.0, 0.0);
-                for (a, b) in block(i, j, w, h, r).filter(|&q| q != (i, j)) {
-                    sd += var[b * w + a].sqrt();
-                    c += cost[b * w + a];
-                    n += 1.0;
+        // with (a change of order changes some counts, and so the image). Blocks cut by
+        // every edge, and blocks larger than the image.
+        for (w, h) in [(11, 9), (1, 7), (7, 1), (3, 2), (1, 1)] {
+            let var: Vec<f64> = (0..w * h)
+                .map(|p| ((p * 7919) % 101) as f64 / 7.0 + 1e-3)
+                .collect();
+            let cost: Vec<f64> = (0..w * h)
+                .map(|p| 1.0 + ((p * 31) % 13) as f64 / 3.0)
+                .collect();
+            for r in 1..=5 {
+                let got = scores(w, h, r, &var, &cost);
+                for p in 0..w * h {
+                    let (i, j) = (p % w, p / w);
+                    let (mut sd, mut c, mut n) = (0.0, 0.0, 0.0);
+                    for (a, b) in block(i, j, w, h, r).filter(|&q| q != (i, j)) {
+                        sd += var[b * w + a].sqrt();
+                        c += cost[b * w + a];
+                        n += 1.0;
+                    }
+                    let want = if n > 0.0 && c > 0.0 {
+                        (sd / n) / (c / n).sqrt()
+                    } else {
+                        0.0
+                    };
+                    assert_eq!(
+                        got[p].to_bits(),
+                        want.to_bits(),
+                        "{w} x {h}, radius {r}, pixel ({i}, {j})"
+                    );
                 }
-                let want = (sd / n) / (c / n).sqrt();
-                assert_eq!(
-                    got[p].to_bits(),
-                    want.to_bits(),
-                    "radius {r}, pixel ({i}, {j})"
-                );
             }
         }
     }

@@ -207,11 +207,13 @@ fn physical_render_matches_one_sample_at_a_time() {
 fn adaptive_render_matches_its_definition() {
     let area = "../conformance/scenes/mitsuba/mi_area_soft_shadow.toml";
     check_adaptive(area, 9, SamplerKind::Sobol);
-    // The smallest budgets that adapt: a pilot of 2 and one more sample a pixel on
-    // average (neighbourhoods of radius 3), a pilot of 3 and two more.
+    // The smallest budgets that adapt (`adaptive::pilot`):
+    // 3 spp, a pilot of 2 and one more sample a pixel on average (radius 3);
     check_adaptive(area, 3, SamplerKind::Sobol);
-    check_adaptive(area, 5, SamplerKind::Sobol);
+    // 4 spp, a pilot of 2 and two more, the rest from stratified's second set;
     check_adaptive(area, 4, SamplerKind::Stratified);
+    // 5 spp, a pilot of 3 and two more (radius 2).
+    check_adaptive(area, 5, SamplerKind::Sobol);
     check_adaptive(area, 12, SamplerKind::Stratified);
     check_adaptive(area, 8, SamplerKind::Independent);
     check_adaptive("scenes/hierarchy.toml", 8, SamplerKind::Sobol);
