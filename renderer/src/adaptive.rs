@@ -198,17 +198,19 @@ pub(crate) fn scores(w: usize, h: usize, r: usize, variance: &[f64], cost: &[f64
             // runs): the order of the sums the counts were measured with, so the same bits
             // (renderer/docs/performance.md, 2026-11-29).
             let mut sum = DVec2::ZERO;
+            let mut add = |run: &[DVec2]| {
+                for x in run {
+                    sum += *x;
+                }
+            };
             for b in block.rows.clone() {
-                let row = &pairs[b * w..(b + 1) * w];
-                let runs = if b == j {
-                    [block.cols.start..i, i + 1..block.cols.end]
+                let run = &pairs[b * w + block.cols.start..b * w + block.cols.end];
+                if b == j {
+                    let k = i - block.cols.start;
+                    add(&run[..k]);
+                    add(&run[k + 1..]);
                 } else {
-                    [block.cols.clone(), 0..0]
-                };
-                for run in runs {
-                    for x in &row[run] {
-                        sum += *x;
-                    }
+                    add(run);
                 }
             }
             let (sd, c) = (sum.x, sum.y);
