@@ -144,15 +144,16 @@ pub fn extra_counts(
     extra: u32,
 ) -> Vec<u32> {
     let score = scores(w, h, r, variance, cost);
-    let outside = Outside::new(w, h, r, &score);
+    let outside = Outside::new(w, h, &score);
     let extra = extra as f64;
     (0..w * h)
         .into_par_iter()
         .map(|p| {
             let (i, j) = (p % w, p / w);
-            let rest = w * h - Block::new(i, j, w, h, r).len();
+            let block = Block::new(i, j, w, h, r);
+            let rest = w * h - block.len();
             let mean = if rest > 0 {
-                outside.sum(i, j) / rest as f64
+                outside.sum(&block) / rest as f64
             } else {
                 0.0
             };
@@ -230,15 +231,13 @@ fn round_up_chance(p: usize) -> f64 {
     crate::sampler::to_unit(crate::sampler::mix64(p as u64 ^ 0xada7_c0de_5eed_0001))
 }
 
-/// Sums of the scores outside each pixel's block of radius `r`, each added up from the scores
+/// Sums of the scores outside each pixel's block ([`Block`]), each added up from the scores
 /// outside the block alone: the rows above and below it (prefix and suffix sums over
 /// whole rows), and in each of its rows the columns left and right of it (prefix and
 /// suffix sums within the row). A total less the block's sum would read the block's
 /// scores through its rounding.
 struct Outside {
     w: usize,
-    h: usize,
-    r: usize,
     /// Sum of the rows before row b, for b in 0..=h.
     rows_before: Vec<f64>,
     /// Sum of the rows from row b on, for b in 0..=h.
@@ -250,7 +249,7 @@ struct Outside {
 }
 
 impl Outside {
-    fn new(w: usize, h: usize, r: usize, score: &[f64]) -> Self {
+    fn new(w: usize, h: usize, score: &[f64]) -> Self {
         let mut cols_before = vec![0.0; (w + 1) * h];
         let mut cols_from = vec![0.0; (w + 1) * h];
         for b in 0..h {
@@ -269,8 +268,6 @@ impl Outside {
         }
         Outside {
             w,
-            h,
-            r,
             rows_before,
             rows_from,
             cols_before,
@@ -278,11 +275,11 @@ impl Outside {
         }
     }
 
-    /// The sum of the scores outside the block of radius `r` around (i, j).
-    fn sum(&self, i: usize, j: usize) -> f64 {
-        let Block { cols, rows } = Block::new(i, j, self.w, self.h, self.r);
+    /// The sum of the scores outside `block`.
+    fn sum(&self, block: &Block) -> f64 {
+        let Block { cols, rows } = block;
         let mut s = self.rows_before[rows.start] + self.rows_from[rows.end];
-        for b in rows {
+        for b in rows.clone() {
             let at = b * (self.w + 1);
             s += self.cols_before[at + cols.start] + self.cols_from[at + cols.end];
         }
@@ -345,10 +342,10 @@ mod tests {
         assert_eq!(pilot(5), Some(3));
         assert_eq!(pilot(6), Some(4));
         assert_eq!(pilot(7), Some(4));
-        assert_eq!(pilot(u32::MAX), Some(u32::MAX / 4));
         assert_eq!(pilot(8), Some(4));
         assert_eq!(pilot(16), Some(4));
         assert_eq!(pilot(258), Some(64));
+        assert_eq!(pilot(u32::MAX), Some(u32::MAX / 4));
     }
 
     #[test]
@@ -469,7 +466,7 @@ mod tests {
         let (w, h) = (7, 5);
         let score: Vec<f64> = (0..w * h).map(|p| (p * p % 13) as f64 + 0.5).collect();
         for r in 1..=3 {
-            let outside = Outside::new(w, h, r, &score);
+            let outside = Outside::new(w, h, &score);
             for j in 0..h {
                 for i in 0..w {
                     let inside: Vec<_> = block(i, j, w, h, r).collect();
@@ -477,15 +474,21 @@ mod tests {
                         .filter(|p| !inside.contains(&(p % w, p / w)))
                         .map(|p| score[p])
                         .sum();
-                    assert_eq!(outside.sum(i, j), want, "radius {r}, pixel ({i}, {j})");
+                    assert_eq!(
+                        outside.sum(&Block::new(i, j, w, h, r)),
+                        want,
+                        "radius {r}, pixel ({i}, {j})"
+                    );
                 }
             }
             // Changing a score inside the block leaves the sum's bits as they were.
             let mut other = score.clone();
             other[(2 + r).min(h - 1) * w + (3 + r).min(w - 1)] = 1e17;
             assert_eq!(
-                Outside::new(w, h, r, &other).sum(3, 2).to_bits(),
-                outside.sum(3, 2).to_bits(),
+                Outside::new(w, h, &other)
+                    .sum(&Block::new(3, 2, w, h, r))
+                    .to_bits(),
+                outside.sum(&Block::new(3, 2, w, h, r)).to_bits(),
                 "radius {r}"
             );
         }
