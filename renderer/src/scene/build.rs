@@ -23,14 +23,21 @@ use glam::DVec3;
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
-/// The largest image, in pixels: 2²⁷ (for example 16384 × 8192). An image with AOVs and
-/// second moments holds 18 floats (72 bytes) per pixel, so the largest needs 9.7 GB.
+/// The largest image, in pixels: 2²⁷ (for example 16384 × 8192). At
+/// [`PEAK_BYTES_PER_PIXEL`] the largest could need 23.6 GB.
 pub const MAX_PIXELS: u64 = 1 << 27;
 
-/// Bytes an image of `pixels` pixels may need: RGB, the geometry AOVs (Z, N, P, objectId)
-/// and the second moments, as 32-bit floats.
+/// The most memory a render and its output take per pixel, in bytes, at their peak: the
+/// image's RGB and AOVs; the second moments; adaptive sampling's pilot and scores between
+/// its passes; the light paths' image; and the EXR writer's copy of every channel. Measured
+/// with a counting allocator, the worst case (adaptive, AOVs, moments, light paths, EXR)
+/// takes 167 to 171 bytes a pixel; a PNG 17 to 68, an EXR with AOVs 88 to 90
+/// (renderer/tests/memory.rs, which fails when a render takes more than this).
+pub const PEAK_BYTES_PER_PIXEL: u64 = 176;
+
+/// Bytes a render of `pixels` pixels may need at its peak ([`PEAK_BYTES_PER_PIXEL`]).
 pub fn image_bytes(pixels: u64) -> u64 {
-    pixels * 18 * 4
+    pixels * PEAK_BYTES_PER_PIXEL
 }
 
 /// Checks an image size: each side at least 1, and at most [`MAX_PIXELS`] pixels. The
@@ -49,7 +56,7 @@ pub fn check_size(width: u32, height: u32) -> Result<(), (&'static str, String)>
             side,
             format!(
                 "{width} × {height} = {px} pixels is more than the limit of {MAX_PIXELS} (2^27): \
-the image with its AOVs could need {:.1} GB",
+a render could need {:.1} GB",
                 image_bytes(px) as f64 / 1e9
             ),
         ));

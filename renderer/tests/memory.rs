@@ -1,0 +1,173 @@
+//! The memory a render and its output take per pixel, against the figure the image-size
+//! check quotes (`scene::build::PEAK_BYTES_PER_PIXEL`). A counting allocator records the
+//! peak of the bytes in use while a scene is rendered and written; two image sizes give the
+//! bytes per pixel, free of what a render takes whatever its size (the scene, the threads)
+//! and of what it takes per column.
+//! This file holds one test, so no other test's allocations are counted.
+
+use renderer::output::{write, ToneMap};
+use renderer::render::{render, Options};
+use renderer::scene::build::PEAK_BYTES_PER_PIXEL;
+use renderer::scene::Scene;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering::SeqCst};
+
+/// The system allocator, counting the bytes in use and their peak.
+struct Counting;
+
+static IN_USE: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+fn counted(p: *mut u8, size: usize) -> *mut u8 {
+    if !p.is_null() {
+        let now = IN_USE.fetch_add(size, SeqCst) + size;
+        PEAK.fetch_max(now, SeqCst);
+    }
+    p
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        counted(unsafe { System.alloc(l) }, l.size())
+    }
+    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
+        counted(unsafe { System.alloc_zeroed(l) }, l.size())
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        unsafe { System.dealloc(p, l) };
+        IN_USE.fetch_sub(l.size(), SeqCst);
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+/// The images' width: both sizes have it, so what a render keeps per column (the EXR
+/// writer's blocks of rows, a row's buffers) cancels out of the bytes per pixel.
+const WIDTH: u32 = 512;
+
+/// What a render keeps per pixel.
+#[derive(Clone, Copy, Debug)]
+struct Case {
+    adaptive: bool,
+    aov: bool,
+    moments: bool,
+    light_paths: bool,
+    exr: bool,
+}
+
+/// The peak of the bytes in use, above those in use before, while `case` renders an image
+/// [`WIDTH`] pixels wide and `rows` high (6 samples a pixel) and writes it.
+fn peak(case: Case, rows: u32) -> usize {
+    // The glass sphere for the light paths (they need a specular object), else the area
+    // light, whose penumbra adaptive sampling spreads its samples over.
+    let name = if case.light_paths {
+        "mi_glass_sphere"
+    } else {
+        "mi_area_soft_shadow"
+    };
+    let path = format!(
+        "{}/../conformance/scenes/mitsuba/{name}.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(&path).unwrap().replace(
+        "width = 48\nheight = 36",
+        &format!(
+            "width = {WIDTH}\nheight = {rows}\nsamples = 6\nadaptive = {}\nlight_paths = {}",
+            case.adaptive, case.light_paths as u32
+        ),
+    );
+    assert!(
+        text.contains("samples = 6"),
+        "{path}: no `width = 48`, `height = 36`"
+    );
+    let scene = Scene::from_str(&text, Path::new(&path), Path::new(".")).unwrap();
+    let out = std::env::temp_dir().join(format!(
+        "renderer-memory-{}.{}",
+        std::process::id(),
+        if case.exr { "exr" } else { "png" }
+    ));
+    let before = IN_USE.load(SeqCst);
+    PEAK.store(before, SeqCst);
+    let opts = Options {
+        threads: Some(2),
+        aov: case.aov,
+        moments: case.moments,
+        ..Options::default()
+    };
+    let img = render(&scene, &opts);
+    write(&img, &out, ToneMap::Srgb).unwrap();
+    drop(img);
+    let _ = std::fs::remove_file(&out);
+    PEAK.load(SeqCst) - before
+}
+
+#[test]
+fn a_render_takes_no_more_memory_a_pixel_than_the_size_check_says() {
+    let no = Case {
+        adaptive: false,
+        aov: false,
+        moments: false,
+        light_paths: false,
+        exr: false,
+    };
+    let cases = [
+        no,
+        Case {
+            adaptive: true,
+            ..no
+        },
+        Case {
+            light_paths: true,
+            ..no
+        },
+        Case {
+            aov: true,
+            exr: true,
+            ..no
+        },
+        Case {
+            adaptive: true,
+            aov: true,
+            exr: true,
+            ..no
+        },
+        Case {
+            adaptive: true,
+            aov: true,
+            moments: true,
+            exr: true,
+            ..no
+        },
+        Case {
+            adaptive: true,
+            aov: true,
+            moments: true,
+            light_paths: true,
+            exr: true,
+        },
+    ];
+    let (small, large) = (128u32, 512u32);
+    let pixels = |rows: u32| (WIDTH * rows) as f64;
+    let mut most = 0.0f64;
+    for case in cases {
+        let per_pixel =
+            (peak(case, large) as f64 - peak(case, small) as f64) / (pixels(large) - pixels(small));
+        eprintln!("{case:?}: {per_pixel:.1} bytes a pixel");
+        assert!(
+            per_pixel <= PEAK_BYTES_PER_PIXEL as f64,
+            "{case:?} takes {per_pixel:.1} bytes a pixel, more than the {PEAK_BYTES_PER_PIXEL} \
+the image-size check counts: raise PEAK_BYTES_PER_PIXEL (renderer/src/scene/build.rs) and \
+the figures in renderer/docs/robustness.md, or find the new buffer"
+        );
+        most = most.max(per_pixel);
+    }
+    // The figure must also stay near the worst case, so the message does not overstate.
+    assert!(
+        most >= 0.9 * PEAK_BYTES_PER_PIXEL as f64,
+        "the most a case takes is {most:.1} bytes a pixel, well under the {PEAK_BYTES_PER_PIXEL} \
+the image-size check counts: lower PEAK_BYTES_PER_PIXEL (renderer/src/scene/build.rs) and the \
+figures in renderer/docs/robustness.md"
+    );
+}
