@@ -57,6 +57,21 @@ struct Case {
     exr: bool,
 }
 
+impl Case {
+    /// The case whose words (`adaptive`, `aov`, `moments`, `light_paths`, `exr`) are in
+    /// `words`.
+    fn from_words(words: &str) -> Case {
+        let has = |w: &str| words.split(' ').any(|x| x == w);
+        Case {
+            adaptive: has("adaptive"),
+            aov: has("aov"),
+            moments: has("moments"),
+            light_paths: has("light_paths"),
+            exr: has("exr"),
+        }
+    }
+}
+
 /// The peak of the bytes in use, above those in use before, while `case` renders an image
 /// [`WIDTH`] pixels wide and `rows` high (6 samples a pixel) and writes it.
 fn peak(case: Case, rows: u32) -> usize {
@@ -105,49 +120,16 @@ fn peak(case: Case, rows: u32) -> usize {
 
 #[test]
 fn a_render_takes_no_more_memory_a_pixel_than_the_size_check_says() {
-    let no = Case {
-        adaptive: false,
-        aov: false,
-        moments: false,
-        light_paths: false,
-        exr: false,
-    };
     let cases = [
-        no,
-        Case {
-            adaptive: true,
-            ..no
-        },
-        Case {
-            light_paths: true,
-            ..no
-        },
-        Case {
-            aov: true,
-            exr: true,
-            ..no
-        },
-        Case {
-            adaptive: true,
-            aov: true,
-            exr: true,
-            ..no
-        },
-        Case {
-            adaptive: true,
-            aov: true,
-            moments: true,
-            exr: true,
-            ..no
-        },
-        Case {
-            adaptive: true,
-            aov: true,
-            moments: true,
-            light_paths: true,
-            exr: true,
-        },
-    ];
+        "png",
+        "adaptive png",
+        "light_paths png",
+        "aov exr",
+        "adaptive aov exr",
+        "adaptive aov moments exr",
+        "adaptive aov moments light_paths exr",
+    ]
+    .map(Case::from_words);
     let (small, large) = (128u32, 512u32);
     let pixels = |rows: u32| (WIDTH * rows) as f64;
     let mut most = 0.0f64;
