@@ -3,8 +3,11 @@
 //! A budget of `spp` samples a pixel is spent in two passes. The pilot traces
 //! [`pilot`]`(spp)` samples in every pixel; the rest of the budget is then shared out
 //! among the pixels in proportion to the noise their neighbours' pilots showed (a pixel's
-//! standard deviation, estimated by the mean of the standard deviations of the pixels
-//! around it: [`radius`], [`scores`]), with a part shared evenly.
+//! standard deviation, estimated from the pixels around it: [`radius`]), with a part
+//! shared evenly. Up to [`SPREAD_UP_TO`] spp the pilot is one sample a pixel, and the
+//! estimate is the spread of the neighbours' samples ([`spread_scores`]); above, each
+//! neighbour's pilot gives its own variance, and the estimate is the mean of their
+//! standard deviations ([`scores`]).
 //! The rest continues each pixel's sequence of samples (`independent`, `sobol`) or is a
 //! second set from an independent stream (`stratified`, whose strata need the count in
 //! advance; render.rs's `Pass::adaptive`). A pixel's value is the mean of all its
@@ -45,17 +48,21 @@ pub const EVEN_SHARE: f64 = 0.25;
 /// The fewest pilot samples a pixel's neighbourhood holds: [`radius`].
 pub const NEIGHBOURHOOD_SAMPLES: u32 = 64;
 
-/// How far a pixel's neighbourhood reaches for a pilot of `pilot` samples a pixel: the
-/// smallest radius (1 is the 8 pixels around it, 2 the 24 of its 5 × 5 block) whose
-/// neighbours hold at least [`NEIGHBOURHOOD_SAMPLES`] pilot samples. A variance from fewer
-/// misses noisy pixels (a light's edge whose neighbours' pilots happened to be quiet);
-/// one from farther than it needs blurs the noise's picture. Measured with `sobol`, five
-/// or six seeds each, at 16 spp (a pilot of 4): the 5 × 5 block cut the squared error of
-/// the glass and mirror scenes by 11–12 % at 256² (7 % at 128²) and the Cornell box's by
-/// 5 % at 256², and on the area-light scene it took away the seeds whose error was 4–36
-/// times the others' (a light's edge left with the even share); with a pilot of 8 or 16
-/// it was 2–4 % worse than the 8 neighbours (renderer/docs/performance.md).
+/// How far a pixel's neighbourhood reaches for a pilot of `pilot` samples a pixel. For a
+/// pilot of one, [`SPREAD_RADIUS`]. Otherwise the smallest radius (1 is the 8 pixels
+/// around it, 2 the 24 of its 5 × 5 block) whose neighbours hold at least
+/// [`NEIGHBOURHOOD_SAMPLES`] pilot samples. A variance from fewer misses noisy pixels (a
+/// light's edge whose neighbours' pilots happened to be quiet); one from farther than it
+/// needs blurs the noise's picture. Measured with `sobol`, five or six seeds each, at 16
+/// spp (a pilot of 4): the 5 × 5 block cut the squared error of the glass and mirror
+/// scenes by 11–12 % at 256² (7 % at 128²) and the Cornell box's by 5 % at 256², and on
+/// the area-light scene it took away the seeds whose error was 4–36 times the others' (a
+/// light's edge left with the even share); with a pilot of 8 or 16 it was 2–4 % worse
+/// than the 8 neighbours (renderer/docs/performance.md).
 pub fn radius(pilot: u32) -> usize {
+    if pilot == 1 {
+        return SPREAD_RADIUS;
+    }
     let mut r = 1;
     while (((2 * r + 1) * (2 * r + 1) - 1) as u32).saturating_mul(pilot) < NEIGHBOURHOOD_SAMPLES {
         r += 1;
@@ -63,32 +70,63 @@ pub fn radius(pilot: u32) -> usize {
     r
 }
 
+/// The radius of the block whose samples' spread scores a pixel after a pilot of one
+/// ([`spread_scores`]): its 5 × 5 block, 24 samples. Four seeds at 3 spp on eight Mitsuba
+/// scenes no bench times: the 3 × 3 block had 0.72–0.96 of its RMSE on six, 1.03 and
+/// 1.05 on the two whose noise covers the image (mi_path_rr, mi_env_diffuse); the 7 × 7
+/// and 9 × 9 blocks were worse at 2–4 spp on six, within 1 % on mi_sphere_light and 1–2 %
+/// better on mi_path_rr (renderer/docs/performance.md).
+pub const SPREAD_RADIUS: usize = 2;
+
 /// No pixel takes more than this many times the average extra samples.
 pub const MAX_FACTOR: f64 = 64.0;
 
 /// Nor more extra samples than this (with the pilot, under 2³¹: sampler.rs's `SEQUENCE`).
 pub const MAX_EXTRA: f64 = (1u32 << 30) as f64 - 1.0;
 
-/// The fewest pilot samples a pixel: two, the fewest that give a variance.
-pub const LEAST_PILOT: u32 = 2;
-
-/// The pilot's floor from 6 spp on: with fewer, the neighbours' variances miss noisy
-/// pixels that a small bright light lights (mi_sphere_light at 6 and 7 spp: a pilot of 3
-/// had 1.29 and 1.45 times the RMSE of a pilot of 4; renderer/docs/performance.md).
+/// The pilot's floor above [`SPREAD_UP_TO`] spp: with fewer, the neighbours' variances
+/// miss noisy pixels that a small bright light lights (mi_sphere_light at 6 and 7 spp: a
+/// pilot of 3 had 1.29 and 1.45 times the RMSE of a pilot of 4; renderer/docs/performance.md).
 pub const MIN_PILOT: u32 = 4;
 
-/// The pilot's samples a pixel for a budget of `spp`: a quarter, at least [`MIN_PILOT`];
-/// below 6 spp, where a pilot of 4 would leave under two samples a pixel to share out, the
-/// budget less two, at least [`LEAST_PILOT`] (3 spp: 2 and one more on average; 4: 2 and 2;
-/// 5: 3 and 2). `None` (no adapting) at 2 spp or fewer. Chosen on eight Mitsuba scenes that
-/// no bench times (renderer/docs/performance.md, "Adaptive sampling from 3 spp"): at 4
-/// spp a pilot of 2 had 0.23–0.91 of the plain render's RMSE, less than a pilot of 3 on
-/// seven of them; at 5 spp a pilot of 3 had 0.77–0.98 of a pilot of 4's.
+/// The largest budget whose pilot is one sample a pixel ([`pilot`]).
+pub const SPREAD_UP_TO: u32 = 16;
+
+/// The pilot's samples a pixel for a budget of `spp`: one from 2 to [`SPREAD_UP_TO`] spp
+/// (its neighbours' samples' spread scores a pixel: [`spread_scores`]); above, a quarter,
+/// at least [`MIN_PILOT`]. `None` (no adapting) at 1 spp. Chosen on eight Mitsuba scenes
+/// that no bench times, four seeds, RMSE against a 1,024-spp render
+/// (renderer/docs/performance.md, "A pilot of one sample"): at 2 spp 0.09–0.94 of the
+/// plain render's; at 3 to 16 spp 0.38–1.02 of the previous pilots' (2 at 3 and 4 spp, 3
+/// at 5, then a quarter, at least 4), at most 1.016 on any scene; at 32 and 64 spp better
+/// on six scenes (0.65–0.98) but 1.01–1.03 on the two whose noise covers the image, and
+/// 5–8 % slower at 128 and 256 spp.
 pub fn pilot(spp: u32) -> Option<u32> {
     match spp {
-        0..=2 => None,
-        3..=5 => Some((spp - 2).max(LEAST_PILOT)),
+        0..=1 => None,
+        2..=SPREAD_UP_TO => Some(1),
         _ => Some((spp / 4).max(MIN_PILOT)),
+    }
+}
+
+/// The extra samples of each pixel after a pilot of `pilot` samples a pixel, from the
+/// pilot's `sums` (each pixel's sample, after a pilot of one: [`extra_counts_from_samples`])
+/// or its `variance`s ([`extra_counts`]), and its `cost`s, for `extra` more samples a pixel
+/// on average, in neighbourhoods of [`radius`]`(pilot)`.
+pub fn extra_counts_after_pilot(
+    w: usize,
+    h: usize,
+    pilot: u32,
+    sums: &[Color],
+    variance: &[f64],
+    cost: &[f64],
+    extra: u32,
+) -> Vec<u32> {
+    let r = radius(pilot);
+    if pilot == 1 {
+        extra_counts_from_samples(w, h, r, sums, cost, extra)
+    } else {
+        extra_counts(w, h, r, variance, cost, extra)
     }
 }
 
@@ -143,8 +181,26 @@ pub fn extra_counts(
     cost: &[f64],
     extra: u32,
 ) -> Vec<u32> {
-    let score = scores(w, h, r, variance, cost);
-    let outside = Outside::new(w, h, &score);
+    share_out(w, h, r, &scores(w, h, r, variance, cost), extra)
+}
+
+/// [`extra_counts`] after a pilot of one sample a pixel, whose variance no pixel's own
+/// sample gives: each pixel's score is the spread of its neighbours' `samples` about their
+/// mean ([`spread_scores`]), over the root of their mean cost.
+pub fn extra_counts_from_samples(
+    w: usize,
+    h: usize,
+    r: usize,
+    samples: &[Color],
+    cost: &[f64],
+    extra: u32,
+) -> Vec<u32> {
+    share_out(w, h, r, &spread_scores(w, h, r, samples, cost), extra)
+}
+
+/// Each pixel's extra count from the pixels' scores, as [`extra_counts`] says.
+fn share_out(w: usize, h: usize, r: usize, score: &[f64], extra: u32) -> Vec<u32> {
+    let outside = Outside::new(w, h, score);
     let extra = extra as f64;
     (0..w * h)
         .into_par_iter()
@@ -190,37 +246,109 @@ pub(crate) fn scores(w: usize, h: usize, r: usize, variance: &[f64], cost: &[f64
         .zip(cost)
         .map(|(v, c)| DVec2::new(v.sqrt(), *c))
         .collect();
-    (0..w * h)
-        .into_par_iter()
-        .map(|p| {
-            let (i, j) = (p % w, p / w);
-            let block = Block::new(i, j, w, h, r);
-            // Row by row, left to right, the pixel itself left out (its own row in two
-            // runs): the order of the sums the counts were measured with, so the same bits
-            // (renderer/docs/performance.md, 2026-11-29).
-            let mut sum = DVec2::ZERO;
-            let mut add = |run: &[DVec2]| {
-                for x in run {
-                    sum += *x;
-                }
-            };
-            for b in block.rows.clone() {
-                let run = &pairs[b * w + block.cols.start..b * w + block.cols.end];
-                if b == j {
-                    let k = i - block.cols.start;
-                    add(&run[..k]);
-                    add(&run[k + 1..]);
-                } else {
-                    add(run);
-                }
-            }
+    neighbour_sums(
+        w,
+        h,
+        r,
+        |p| pairs[p],
+        |sum, n| {
             let (sd, c) = (sum.x, sum.y);
-            let n = (block.len() - 1) as f64;
+            let n = n as f64;
             if n > 0.0 && c > 0.0 {
                 (sd / n) / (c / n).sqrt()
             } else {
                 0.0
             }
+        },
+    )
+}
+
+/// Each pixel's score σ/√c after a pilot of one sample a pixel: σ the standard deviation of
+/// its neighbours' samples about their mean (the unbiased sample variance, summed over R, G
+/// and B), c the mean of their costs. The samples' spread holds the image's own changes
+/// across the block as well as its noise: an edge draws samples as noise does, which it
+/// also needs at one sample a pixel.
+pub(crate) fn spread_scores(
+    w: usize,
+    h: usize,
+    r: usize,
+    samples: &[Color],
+    cost: &[f64],
+) -> Vec<f64> {
+    assert_eq!(samples.len(), w * h, "one sample a pixel");
+    assert_eq!(cost.len(), w * h, "one cost a pixel");
+    let item = |p: usize| {
+        let x = samples[p].as_dvec3();
+        Spread {
+            x,
+            xx: x * x,
+            cost: cost[p],
+        }
+    };
+    neighbour_sums(w, h, r, item, |sum, n| {
+        if n < 2 || !(sum.cost > 0.0) {
+            return 0.0;
+        }
+        let n = n as f64;
+        let var = (sum.xx - sum.x * sum.x / n) / (n - 1.0);
+        // Rounding can take a tiny variance below 0; a non-finite sample is reported by
+        // the render itself.
+        let var = var.max(glam::DVec3::ZERO).element_sum();
+        if !var.is_finite() {
+            return 0.0;
+        }
+        var.sqrt() / (sum.cost / n).sqrt()
+    })
+}
+
+/// The sums of a block's samples, their squares and their costs ([`spread_scores`]).
+#[derive(Clone, Copy, Default)]
+struct Spread {
+    x: glam::DVec3,
+    xx: glam::DVec3,
+    cost: f64,
+}
+
+impl std::ops::AddAssign for Spread {
+    fn add_assign(&mut self, o: Spread) {
+        self.x += o.x;
+        self.xx += o.xx;
+        self.cost += o.cost;
+    }
+}
+
+/// For each pixel p, `score(sum, n)` of the sum of `item(q)` over the `n` pixels q of p's
+/// block of radius `r` other than p: row by row, left to right, p's own row in two runs
+/// (the order of the sums the counts were measured with, so the same bits;
+/// renderer/docs/performance.md, 2026-11-29).
+fn neighbour_sums<T: Copy + Default + std::ops::AddAssign>(
+    w: usize,
+    h: usize,
+    r: usize,
+    item: impl Fn(usize) -> T + Sync,
+    score: impl Fn(T, usize) -> f64 + Sync,
+) -> Vec<f64> {
+    (0..w * h)
+        .into_par_iter()
+        .map(|p| {
+            let (i, j) = (p % w, p / w);
+            let block = Block::new(i, j, w, h, r);
+            let mut sum = T::default();
+            let mut add = |run: Range<usize>| {
+                for q in run {
+                    sum += item(q);
+                }
+            };
+            for b in block.rows.clone() {
+                let run = b * w + block.cols.start..b * w + block.cols.end;
+                if b == j {
+                    add(run.start..p);
+                    add(p + 1..run.end);
+                } else {
+                    add(run);
+                }
+            }
+            score(sum, block.len() - 1)
         })
         .collect()
 }
@@ -333,17 +461,15 @@ mod tests {
     }
 
     #[test]
-    fn the_pilot_is_a_quarter_and_at_least_four_from_six_samples_and_two_from_three() {
+    fn the_pilot_is_one_sample_to_sixteen_then_a_quarter_and_at_least_four() {
         assert_eq!(pilot(0), None);
         assert_eq!(pilot(1), None);
-        assert_eq!(pilot(2), None);
-        assert_eq!(pilot(3), Some(2));
-        assert_eq!(pilot(4), Some(2));
-        assert_eq!(pilot(5), Some(3));
-        assert_eq!(pilot(6), Some(4));
-        assert_eq!(pilot(7), Some(4));
-        assert_eq!(pilot(8), Some(4));
-        assert_eq!(pilot(16), Some(4));
+        for spp in 2..=16 {
+            assert_eq!(pilot(spp), Some(1), "{spp} spp");
+        }
+        assert_eq!(pilot(17), Some(4));
+        assert_eq!(pilot(19), Some(4));
+        assert_eq!(pilot(20), Some(5));
         assert_eq!(pilot(258), Some(64));
         assert_eq!(pilot(u32::MAX), Some(u32::MAX / 4));
     }
@@ -416,11 +542,13 @@ mod tests {
         assert_eq!(radius(7), 2);
         assert_eq!(radius(8), 1);
         assert_eq!(radius(64), 1);
-        assert_eq!(radius(1), 4);
-        // The smallest pilots: 2 reads the 48 of its 7 x 7 block, 3 the 24 of its 5 x 5.
+        // A pilot of one: the spread of the 24 samples of its 5 x 5 block.
+        assert_eq!(radius(1), 2);
+        // Small pilots (which no budget takes now): 2 reads the 48 of its 7 x 7 block, 3
+        // the 24 of its 5 x 5.
         assert_eq!(radius(2), 3);
         assert_eq!(radius(3), 2);
-        for pilot in 1..100 {
+        for pilot in 2..100 {
             let r = radius(pilot) as u32;
             assert!(((2 * r + 1).pow(2) - 1) * pilot >= NEIGHBOURHOOD_SAMPLES);
             assert!(r == 1 || ((2 * r - 1).pow(2) - 1) * pilot < NEIGHBOURHOOD_SAMPLES);
@@ -552,6 +680,58 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    #[test]
+    fn spread_scores_are_the_neighbours_spread_over_their_root_mean_cost() {
+        // 3 x 1: the middle pixel's neighbours are (1, 0, 2) and (3, 0, 2), with costs 1
+        // and 3: variance 2 in R, 0 in G and B; mean cost 2; its own sample is not read.
+        let samples = [
+            Color::new(1.0, 0.0, 2.0),
+            Color::new(1e6, -1e6, 1e6),
+            Color::new(3.0, 0.0, 2.0),
+        ];
+        let s = spread_scores(3, 1, 1, &samples, &[1.0, 1e6, 3.0]);
+        assert!((s[1] - 1.0).abs() < 1e-12, "{}", s[1]);
+        // The ends have one neighbour each, which gives no spread.
+        assert_eq!((s[0], s[2]), (0.0, 0.0));
+        // Equal samples, no cost, or a non-finite sample: 0.
+        let flat = [Color::ONE; 4];
+        assert_eq!(spread_scores(4, 1, 1, &flat, &[1.0; 4]), vec![0.0; 4]);
+        assert_eq!(spread_scores(3, 1, 1, &samples, &[0.0; 3])[1], 0.0);
+        let inf = [Color::ONE, Color::ONE, Color::INFINITY];
+        assert_eq!(spread_scores(3, 1, 1, &inf, &[1.0; 3])[1], 0.0);
+    }
+
+    #[test]
+    fn a_pixels_count_does_not_read_its_own_sample_after_a_pilot_of_one() {
+        let (w, h, x, y) = (31, 27, 15, 13);
+        let cost = vec![1.0; w * h];
+        // Samples that vary a little everywhere, and one that stands out.
+        let samples = |v: f32| -> Vec<Color> {
+            (0..w * h)
+                .map(|p| match p == y * w + x {
+                    true => Color::splat(v),
+                    false => Color::splat(((p * 7919) % 13) as f32 / 100.0),
+                })
+                .collect()
+        };
+        for r in 1..=3 {
+            let quiet = extra_counts_from_samples(w, h, r, &samples(0.06), &cost, 12);
+            let loud = extra_counts_from_samples(w, h, r, &samples(1e3), &cost, 12);
+            assert_eq!(quiet[y * w + x], loud[y * w + x], "radius {r}");
+            for (a, b) in block(x, y, w, h, r).filter(|&q| q != (x, y)) {
+                let p = b * w + a;
+                assert!(
+                    loud[p] > 2 * quiet[p],
+                    "radius {r}, neighbour ({a}, {b}): {} vs {}",
+                    loud[p],
+                    quiet[p]
+                );
+            }
+            let outside = (y * w + x) - r - 1;
+            assert!(loud[outside] <= quiet[outside], "radius {r}");
         }
     }
 }

@@ -241,7 +241,7 @@ fn render_adaptive(
         });
     drop(sq_rows);
     let extra =
-        adaptive::extra_counts(w, h, adaptive::radius(pilot), &variance, &cost, spp - pilot);
+        adaptive::extra_counts_after_pilot(w, h, pilot, &sums, &variance, &cost, spp - pilot);
     let samples = (w * h) as u64 * pilot as u64 + extra.iter().map(|&k| k as u64).sum::<u64>();
     let bad = rgb
         .par_chunks_mut(w * 3)

@@ -169,8 +169,9 @@ fn check_adaptive(file: &str, spp: u32, sampler: SamplerKind) {
         .iter()
         .map(|(.., d)| adaptive::cost(*d, pilot))
         .collect();
+    let sums: Vec<_> = first.iter().map(|(sum, ..)| *sum).collect();
     let extra =
-        adaptive::extra_counts(w, h, adaptive::radius(pilot), &variance, &cost, spp - pilot);
+        adaptive::extra_counts_after_pilot(w, h, pilot, &sums, &variance, &cost, spp - pilot);
     assert!(
         extra.iter().any(|&k| k != extra[0]),
         "{file}: every pixel got the same extra count, so this test shows nothing about uneven counts"
@@ -206,15 +207,17 @@ fn physical_render_matches_one_sample_at_a_time() {
 #[test]
 fn adaptive_render_matches_its_definition() {
     let area = "../conformance/scenes/mitsuba/mi_area_soft_shadow.toml";
-    check_adaptive(area, 9, SamplerKind::Sobol);
-    // The smallest budgets that adapt (`adaptive::pilot`):
-    // 3 spp, a pilot of 2 and one more sample a pixel on average (radius 3);
-    check_adaptive(area, 3, SamplerKind::Sobol);
-    // 4 spp, a pilot of 2 and two more, the rest from stratified's second set;
+    // A pilot of one sample a pixel (`adaptive::pilot`), scored by its neighbours'
+    // samples' spread: the smallest budget that adapts, 2 spp, and others up to 16, the
+    // rest from stratified's second set at 4 and 12;
+    check_adaptive(area, 2, SamplerKind::Sobol);
     check_adaptive(area, 4, SamplerKind::Stratified);
-    // 5 spp, a pilot of 3 and two more (radius 2).
-    check_adaptive(area, 5, SamplerKind::Sobol);
+    check_adaptive(area, 9, SamplerKind::Sobol);
     check_adaptive(area, 12, SamplerKind::Stratified);
     check_adaptive(area, 8, SamplerKind::Independent);
     check_adaptive("scenes/hierarchy.toml", 8, SamplerKind::Sobol);
+    check_adaptive(area, 16, SamplerKind::Sobol);
+    // a pilot of 4 (a quarter) scored by its neighbours' own variances, from 17 spp.
+    check_adaptive(area, 17, SamplerKind::Sobol);
+    check_adaptive(area, 24, SamplerKind::Stratified);
 }
