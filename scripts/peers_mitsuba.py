@@ -82,7 +82,7 @@ def refine(pts, target, measure, counts_between, rounds=8):
     """The error ladder `pts` [(spp, error)] with the counts next to its crossing of `target`
     measured too, ascending. The log-log line between two ladder counts is a model, and a
     poor one where a sampler changes its regime between them: our adaptive sampling had no
-    pilot below 8 spp before 2026-11-29 (now below 3) and rendered every pixel alike there,
+    pilot below 8 spp before 2026-11-29 (now below 2) and rendered every pixel alike there,
     so its 4-spp error lay on the plain sampler's curve and its 16-spp error on the adaptive
     one's, and the line between them put the Cornell box's crossing at 14.6 spp where
     renders at 13 and 14 spp measured it at 13.5. Each round takes the two measured counts
