@@ -45,7 +45,8 @@ use std::ops::Range;
 /// still gets some.
 pub const EVEN_SHARE: f64 = 0.25;
 
-/// The fewest pilot samples a pixel's neighbourhood holds: [`radius`].
+/// The fewest pilot samples a pixel's neighbourhood holds after a pilot of more than one
+/// ([`radius`]; after a pilot of one, the 24 of [`SPREAD_RADIUS`]).
 pub const NEIGHBOURHOOD_SAMPLES: u32 = 64;
 
 /// How far a pixel's neighbourhood reaches for a pilot of `pilot` samples a pixel. For a
@@ -54,7 +55,7 @@ pub const NEIGHBOURHOOD_SAMPLES: u32 = 64;
 /// [`NEIGHBOURHOOD_SAMPLES`] pilot samples. A variance from fewer misses noisy pixels (a
 /// light's edge whose neighbours' pilots happened to be quiet); one from farther than it
 /// needs blurs the noise's picture. Measured with `sobol`, five or six seeds each, at 16
-/// spp (a pilot of 4): the 5 × 5 block cut the squared error of the glass and mirror
+/// spp with a pilot of 4 (the rule before the pilot of one): the 5 × 5 block cut the squared error of the glass and mirror
 /// scenes by 11–12 % at 256² (7 % at 128²) and the Cornell box's by 5 % at 256², and on
 /// the area-light scene it took away the seeds whose error was 4–36 times the others' (a
 /// light's edge left with the even share); with a pilot of 8 or 16 it was 2–4 % worse
@@ -84,17 +85,20 @@ pub const MAX_FACTOR: f64 = 64.0;
 /// Nor more extra samples than this (with the pilot, under 2³¹: sampler.rs's `SEQUENCE`).
 pub const MAX_EXTRA: f64 = (1u32 << 30) as f64 - 1.0;
 
-/// The pilot's floor above [`SPREAD_UP_TO`] spp: with fewer, the neighbours' variances
-/// miss noisy pixels that a small bright light lights (mi_sphere_light at 6 and 7 spp: a
-/// pilot of 3 had 1.29 and 1.45 times the RMSE of a pilot of 4; renderer/docs/performance.md).
+/// The fewest pilot samples whose own variances score the neighbours: with fewer, they miss
+/// noisy pixels that a small bright light lights (mi_sphere_light at 6 and 7 spp: a pilot
+/// of 3 had 1.29 and 1.45 times the RMSE of a pilot of 4; renderer/docs/performance.md).
+/// Every budget above [`SPREAD_UP_TO`] has a quarter at least this large (checked when
+/// built).
 pub const MIN_PILOT: u32 = 4;
+const _: () = assert!((SPREAD_UP_TO + 1) / 4 >= MIN_PILOT);
 
 /// The largest budget whose pilot is one sample a pixel ([`pilot`]).
 pub const SPREAD_UP_TO: u32 = 16;
 
 /// The pilot's samples a pixel for a budget of `spp`: one from 2 to [`SPREAD_UP_TO`] spp
-/// (its neighbours' samples' spread scores a pixel: [`spread_scores`]); above, a quarter,
-/// at least [`MIN_PILOT`]. `None` (no adapting) at 1 spp. Chosen on eight Mitsuba scenes
+/// (its neighbours' samples' spread scores a pixel: [`spread_scores`]); above, a quarter
+/// (at least [`MIN_PILOT`]). `None` (no adapting) at 1 spp. Chosen on eight Mitsuba scenes
 /// that no bench times, four seeds, RMSE against a 1,024-spp render
 /// (renderer/docs/performance.md, "A pilot of one sample"): at 2 spp 0.09–0.94 of the
 /// plain render's; at 3 to 16 spp 0.38–1.02 of the previous pilots' (2 at 3 and 4 spp, 3
@@ -105,7 +109,7 @@ pub fn pilot(spp: u32) -> Option<u32> {
     match spp {
         0..=1 => None,
         2..=SPREAD_UP_TO => Some(1),
-        _ => Some((spp / 4).max(MIN_PILOT)),
+        _ => Some(spp / 4),
     }
 }
 
@@ -228,7 +232,7 @@ fn share_out(w: usize, h: usize, r: usize, score: &[f64], extra: u32) -> Vec<u32
 /// itself): σ the mean of their standard deviations, c the mean of their costs.
 ///
 /// The mean of the standard deviations, not the root of the mean variance: each
-/// neighbour's variance comes from a few pilot samples (4 at 16 spp), and one bright
+/// neighbour's variance comes from a few pilot samples (4 at 17 to 19 spp), and one bright
 /// sample makes it large, which the root of the mean passes on to the whole block. Five
 /// or six seeds at 256², 16 spp (64 for the second figure): squared error 0.94 (0.95) of
 /// the root of the mean's on the Cornell box, 0.96 (0.93) on the area light, 0.95 on the
@@ -238,7 +242,7 @@ pub(crate) fn scores(w: usize, h: usize, r: usize, variance: &[f64], cost: &[f64
     assert_eq!(variance.len(), w * h, "one variance a pixel");
     assert_eq!(cost.len(), w * h, "one cost a pixel");
     // Each pixel's standard deviation, taken once, beside its cost: a block reads the
-    // pair for each of its 8 to 48 neighbours and adds it up as one pair, each lane its own
+    // pair for each of its 8 or 24 neighbours and adds it up as one pair, each lane its own
     // sum in the same order (the same bits as two sums; 8 bytes a pixel more than the
     // deviations alone, for the step between the passes).
     let pairs: Vec<DVec2> = variance
@@ -289,17 +293,25 @@ pub(crate) fn spread_scores(
         if n < 2 || !(sum.cost > 0.0) {
             return 0.0;
         }
-        let n = n as f64;
-        let var = (sum.xx - sum.x * sum.x / n) / (n - 1.0);
-        // Rounding can take a tiny variance below 0; a non-finite sample is reported by
-        // the render itself.
-        let var = var.max(glam::DVec3::ZERO).element_sum();
-        if !var.is_finite() {
+        // A non-finite sample gives the block no spread, as `variance` gives its pixel
+        // none (the render itself reports it).
+        if !(sum.x.is_finite() && sum.xx.is_finite()) {
             return 0.0;
         }
-        var.sqrt() / (sum.cost / n).sqrt()
+        let n = n as f64;
+        let var = (sum.xx - sum.x * sum.x / n) / (n - 1.0);
+        // Rounding leaves equal samples a spread of a few ulps of their mean square (or
+        // takes it below 0): none, so that a flat block scores 0 as a flat pilot does.
+        let floor = sum.xx / n * FLAT;
+        let var = glam::DVec3::select(var.cmpgt(floor), var, glam::DVec3::ZERO);
+        var.element_sum().sqrt() / (sum.cost / n).sqrt()
     })
 }
+
+/// A block's spread in a channel at most this part of its samples' mean square is taken
+/// for rounding ([`spread_scores`]): far above the few ulps that 24 sums leave, far below
+/// any noise a render shows.
+const FLAT: f64 = 1e-12;
 
 /// The sums of a block's samples, their squares and their costs ([`spread_scores`]).
 #[derive(Clone, Copy, Default)]
@@ -685,20 +697,28 @@ mod tests {
 
     #[test]
     fn spread_scores_are_the_neighbours_spread_over_their_root_mean_cost() {
-        // 3 x 1: the middle pixel's neighbours are (1, 0, 2) and (3, 0, 2), with costs 1
-        // and 3: variance 2 in R, 0 in G and B; mean cost 2; its own sample is not read.
+        // 3 x 1: the middle pixel's neighbours are (1, 0, 2) and (3, 2, 2), with costs 1
+        // and 3: variance 2 in R and G, 0 in B, 4 in all (so σ 2, not the sum of the
+        // channels' deviations, 2√2); mean cost 2; its own sample is not read.
         let samples = [
             Color::new(1.0, 0.0, 2.0),
             Color::new(1e6, -1e6, 1e6),
-            Color::new(3.0, 0.0, 2.0),
+            Color::new(3.0, 2.0, 2.0),
         ];
         let s = spread_scores(3, 1, 1, &samples, &[1.0, 1e6, 3.0]);
-        assert!((s[1] - 1.0).abs() < 1e-12, "{}", s[1]);
+        assert!((s[1] - 2.0 / 2f64.sqrt()).abs() < 1e-12, "{}", s[1]);
         // The ends have one neighbour each, which gives no spread.
         assert_eq!((s[0], s[2]), (0.0, 0.0));
-        // Equal samples, no cost, or a non-finite sample: 0.
-        let flat = [Color::ONE; 4];
-        assert_eq!(spread_scores(4, 1, 1, &flat, &[1.0; 4]), vec![0.0; 4]);
+        // Equal samples (whose squares' sums round: 0.1 is not a binary fraction), no
+        // cost, or a non-finite sample: 0.
+        for v in [1.0, 0.1, 0.7, 3.3e-5] {
+            let flat = vec![Color::splat(v); 7 * 5];
+            assert_eq!(
+                spread_scores(7, 5, 2, &flat, &[1.0; 7 * 5]),
+                vec![0.0; 7 * 5],
+                "samples {v}"
+            );
+        }
         assert_eq!(spread_scores(3, 1, 1, &samples, &[0.0; 3])[1], 0.0);
         let inf = [Color::ONE, Color::ONE, Color::INFINITY];
         assert_eq!(spread_scores(3, 1, 1, &inf, &[1.0; 3])[1], 0.0);
@@ -720,7 +740,13 @@ mod tests {
         for r in 1..=3 {
             let quiet = extra_counts_from_samples(w, h, r, &samples(0.06), &cost, 12);
             let loud = extra_counts_from_samples(w, h, r, &samples(1e3), &cost, 12);
+            let mut costly = cost.clone();
+            costly[y * w + x] = 50.0;
+            let dear = extra_counts_from_samples(w, h, r, &samples(0.06), &costly, 12);
+            // The pixel's own count is the same; its neighbours' rise with its sample, and
+            // fall when it is dear.
             assert_eq!(quiet[y * w + x], loud[y * w + x], "radius {r}");
+            assert_eq!(quiet[y * w + x], dear[y * w + x], "radius {r}");
             for (a, b) in block(x, y, w, h, r).filter(|&q| q != (x, y)) {
                 let p = b * w + a;
                 assert!(
@@ -729,9 +755,39 @@ mod tests {
                     loud[p],
                     quiet[p]
                 );
+                assert!(
+                    dear[p] < quiet[p],
+                    "radius {r}, neighbour ({a}, {b}): {} vs {}",
+                    dear[p],
+                    quiet[p]
+                );
             }
             let outside = (y * w + x) - r - 1;
             assert!(loud[outside] <= quiet[outside], "radius {r}");
         }
+    }
+
+    #[test]
+    fn a_pilot_of_one_is_scored_by_the_samples_and_a_larger_one_by_the_variances() {
+        let (w, h) = (23, 19);
+        let sums: Vec<Color> = (0..w * h)
+            .map(|p| Color::new(((p * 7919) % 17) as f32, (p % 5) as f32, 1.0))
+            .collect();
+        let var: Vec<f64> = (0..w * h).map(|p| ((p * 31) % 11) as f64).collect();
+        let cost: Vec<f64> = (0..w * h).map(|p| 1.0 + (p % 3) as f64).collect();
+        let after = |pilot| extra_counts_after_pilot(w, h, pilot, &sums, &var, &cost, 9);
+        assert_eq!(
+            after(1),
+            extra_counts_from_samples(w, h, SPREAD_RADIUS, &sums, &cost, 9)
+        );
+        for pilot in [4, 5, 8, 64] {
+            assert_eq!(
+                after(pilot),
+                extra_counts(w, h, radius(pilot), &var, &cost, 9),
+                "pilot {pilot}"
+            );
+        }
+        // The two scores differ here, so the routing shows.
+        assert_ne!(after(1), extra_counts(w, h, SPREAD_RADIUS, &var, &cost, 9));
     }
 }

@@ -7,7 +7,7 @@
 
 use renderer::output::{write, ToneMap};
 use renderer::render::{render, Options};
-use renderer::scene::build::PEAK_BYTES_PER_PIXEL;
+use renderer::scene::build::{PEAK_BYTES_PER_PIXEL, PEAK_BYTES_PER_ROW};
 use renderer::scene::Scene;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::Path;
@@ -50,7 +50,10 @@ const WIDTH: u32 = 512;
 /// What a render keeps per pixel.
 #[derive(Clone, Copy, Debug)]
 struct Case {
-    adaptive: bool,
+    /// Adaptive sampling's budget: 17 spp (`adaptive`: a pilot of 4, scored by the
+    /// neighbours' own variances, whose pairs take the most) or 6 (`spread`: a pilot of
+    /// one, scored by the neighbours' samples).
+    adaptive: Option<u32>,
     aov: bool,
     moments: bool,
     light_paths: bool,
@@ -58,12 +61,16 @@ struct Case {
 }
 
 impl Case {
-    /// The case whose words (`adaptive`, `aov`, `moments`, `light_paths`, `exr`) are in
-    /// `words`.
+    /// The case whose words (`adaptive` or `spread`, `aov`, `moments`, `light_paths`,
+    /// `exr`) are in `words`.
     fn from_words(words: &str) -> Case {
         let has = |w: &str| words.split(' ').any(|x| x == w);
         Case {
-            adaptive: has("adaptive"),
+            adaptive: match (has("adaptive"), has("spread")) {
+                (true, _) => Some(17),
+                (_, true) => Some(6),
+                _ => None,
+            },
             aov: has("aov"),
             moments: has("moments"),
             light_paths: has("light_paths"),
@@ -73,8 +80,8 @@ impl Case {
 }
 
 /// The peak of the bytes in use, above those in use before, while `case` renders an image
-/// [`WIDTH`] pixels wide and `rows` high (6 samples a pixel) and writes it.
-fn peak(case: Case, rows: u32) -> usize {
+/// `width` pixels wide and `rows` high (4 samples a pixel unless adaptive) and writes it.
+fn peak(case: Case, width: u32, rows: u32) -> usize {
     // The glass sphere for the light paths (they need a specular object), else the area
     // light, whose penumbra adaptive sampling spreads its samples over.
     let name = if case.light_paths {
@@ -89,12 +96,14 @@ fn peak(case: Case, rows: u32) -> usize {
     let text = std::fs::read_to_string(&path).unwrap().replace(
         "width = 48\nheight = 36",
         &format!(
-            "width = {WIDTH}\nheight = {rows}\nsamples = 6\nadaptive = {}\nlight_paths = {}",
-            case.adaptive, case.light_paths as u32
+            "width = {width}\nheight = {rows}\nsamples = {}\nadaptive = {}\nlight_paths = {}",
+            case.adaptive.unwrap_or(4),
+            case.adaptive.is_some(),
+            case.light_paths as u32
         ),
     );
     assert!(
-        text.contains("samples = 6"),
+        text.contains(&format!("height = {rows}")),
         "{path}: no `width = 48`, `height = 36`"
     );
     let scene = Scene::from_str(&text, Path::new(&path), Path::new(".")).unwrap();
@@ -123,10 +132,12 @@ fn a_render_takes_no_more_memory_a_pixel_than_the_size_check_says() {
     let cases = [
         "png",
         "adaptive png",
+        "spread png",
         "light_paths png",
         "aov exr",
         "adaptive aov exr",
         "adaptive aov moments exr",
+        "spread aov moments exr",
         "adaptive aov moments light_paths exr",
     ]
     .map(Case::from_words);
@@ -134,8 +145,8 @@ fn a_render_takes_no_more_memory_a_pixel_than_the_size_check_says() {
     let pixels = |rows: u32| (WIDTH * rows) as f64;
     let mut most = 0.0f64;
     for case in cases {
-        let per_pixel =
-            (peak(case, large) as f64 - peak(case, small) as f64) / (pixels(large) - pixels(small));
+        let per_pixel = (peak(case, WIDTH, large) as f64 - peak(case, WIDTH, small) as f64)
+            / (pixels(large) - pixels(small));
         eprintln!("{case:?}: {per_pixel:.1} bytes a pixel");
         assert!(
             per_pixel <= PEAK_BYTES_PER_PIXEL as f64,
@@ -150,6 +161,36 @@ the figures in renderer/docs/robustness.md, or find the new buffer"
         most >= 0.9 * PEAK_BYTES_PER_PIXEL as f64,
         "the most a case takes is {most:.1} bytes a pixel, well under the {PEAK_BYTES_PER_PIXEL} \
 the image-size check counts: lower PEAK_BYTES_PER_PIXEL (renderer/src/scene/build.rs) and the \
+figures in renderer/docs/robustness.md"
+    );
+    narrow_renders_take_no_more_memory_a_row_than_the_size_check_says();
+}
+
+/// Images one pixel wide: what a render keeps per row (the rows' slices of the image and
+/// the moments, adaptive sampling's sums of whole rows and its one more column) counts as
+/// much as what it keeps per pixel, and the size check counts it too.
+fn narrow_renders_take_no_more_memory_a_row_than_the_size_check_says() {
+    let (small, large) = (4096u32, 16384u32);
+    let most = PEAK_BYTES_PER_PIXEL + PEAK_BYTES_PER_ROW;
+    let mut worst = 0.0f64;
+    for words in ["adaptive aov moments exr", "spread aov moments exr"] {
+        let case = Case::from_words(words);
+        let per_row =
+            (peak(case, 1, large) as f64 - peak(case, 1, small) as f64) / (large - small) as f64;
+        eprintln!("{case:?}, one pixel wide: {per_row:.1} bytes a row");
+        assert!(
+            per_row <= most as f64,
+            "{case:?} takes {per_row:.1} bytes a row of one pixel, more than the {most} the \
+image-size check counts (PEAK_BYTES_PER_PIXEL + PEAK_BYTES_PER_ROW): raise PEAK_BYTES_PER_ROW \
+(renderer/src/scene/build.rs) and the figures in renderer/docs/robustness.md, or find the new \
+buffer"
+        );
+        worst = worst.max(per_row);
+    }
+    assert!(
+        worst >= 0.9 * most as f64,
+        "the most a one-pixel-wide case takes is {worst:.1} bytes a row, well under the {most} \
+the image-size check counts: lower PEAK_BYTES_PER_ROW (renderer/src/scene/build.rs) and the \
 figures in renderer/docs/robustness.md"
     );
 }

@@ -138,7 +138,8 @@ fn check(file: &str, spp: u32) {
 }
 
 /// Adaptive sampling (renderer/src/adaptive.rs) against its definition: the pilot's
-/// samples in every pixel, the extra counts from the pilots' variances and costs, the
+/// samples in every pixel, the extra counts from the pilots' variances (after a pilot of
+/// one, their samples) and costs, the
 /// extra samples from the second stream (pixel numbers offset by w·h), and each pixel the
 /// mean of all its samples.
 fn check_adaptive(file: &str, spp: u32, sampler: SamplerKind) {

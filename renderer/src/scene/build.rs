@@ -30,14 +30,21 @@ pub const MAX_PIXELS: u64 = 1 << 27;
 /// The most memory a render and its output take per pixel, in bytes, at their peak: the
 /// image's RGB and AOVs; the second moments; adaptive sampling's pilot and scores between
 /// its passes; the light paths' image; and the EXR writer's copy of every channel. Measured
-/// with a counting allocator, the worst case (adaptive, AOVs, moments, light paths, EXR)
-/// takes 167 to 171 bytes a pixel; a PNG 17 to 68, an EXR with AOVs 88 to 90
-/// (renderer/tests/memory.rs, which fails when a render takes more than this).
+/// with a counting allocator, the worst case (adaptive, AOVs, moments, EXR) takes 171
+/// bytes a pixel; a PNG 17 to 68, an EXR with AOVs 87 to 89 (renderer/tests/memory.rs,
+/// which fails when a render takes more than this, or much less).
 pub const PEAK_BYTES_PER_PIXEL: u64 = 176;
 
-/// Bytes a render of `pixels` pixels may need at its peak ([`PEAK_BYTES_PER_PIXEL`]).
-pub fn image_bytes(pixels: u64) -> u64 {
-    pixels * PEAK_BYTES_PER_PIXEL
+/// The most memory a render takes per row of the image beyond its pixels', in bytes: the
+/// rows' slices of the image and its moments, adaptive sampling's sums of whole rows and
+/// its prefix sums' one more column. It counts where an image is a few pixels wide
+/// (renderer/tests/memory.rs: 209.7 bytes a row one pixel wide, 171 of them the pixel's).
+pub const PEAK_BYTES_PER_ROW: u64 = 48;
+
+/// Bytes a render of `width` × `height` pixels may need at its peak
+/// ([`PEAK_BYTES_PER_PIXEL`], [`PEAK_BYTES_PER_ROW`]).
+pub fn image_bytes(width: u64, height: u64) -> u64 {
+    width * height * PEAK_BYTES_PER_PIXEL + height * PEAK_BYTES_PER_ROW
 }
 
 /// Checks an image size: each side at least 1, and at most [`MAX_PIXELS`] pixels. The
@@ -57,7 +64,7 @@ pub fn check_size(width: u32, height: u32) -> Result<(), (&'static str, String)>
             format!(
                 "{width} × {height} = {px} pixels is more than the limit of {MAX_PIXELS} (2^27): \
 a render could need {:.1} GB",
-                image_bytes(px) as f64 / 1e9
+                image_bytes(width as u64, height as u64) as f64 / 1e9
             ),
         ));
     }
