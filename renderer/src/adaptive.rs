@@ -722,6 +722,15 @@ mod tests {
         assert_eq!(spread_scores(3, 1, 1, &samples, &[0.0; 3])[1], 0.0);
         let inf = [Color::ONE, Color::ONE, Color::INFINITY];
         assert_eq!(spread_scores(3, 1, 1, &inf, &[1.0; 3])[1], 0.0);
+        // Not even the other channels' spread, as `variance` gives its pixel none.
+        for bad in [f32::INFINITY, f32::NAN] {
+            let one = [
+                Color::new(bad, 0.0, 0.0),
+                Color::ONE,
+                Color::new(0.0, 5.0, 0.0),
+            ];
+            assert_eq!(spread_scores(3, 1, 1, &one, &[1.0; 3])[1], 0.0, "{bad}");
+        }
     }
 
     #[test]
