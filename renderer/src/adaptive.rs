@@ -496,25 +496,29 @@ mod tests {
         assert_eq!(variance(Color::new(f32::NAN, 0.0, 0.0), &sq, 2), 0.0);
     }
 
-    #[test]
-    fn a_pixels_count_does_not_read_its_own_pilot() {
-        // Large enough that the spike's neighbourhood is a small part of the image.
-        let (w, h, x, y) = (31, 27, 15, 13);
+    /// Checks, for radii 1 to 3, that the count of the pixel (`x`, `y`) of a `w` × `h` image
+    /// is the same whether its pilot is loud (noisy), quiet or dear (costly); that its
+    /// neighbours' counts rise more than `rise` times when it is loud and fall when it is
+    /// dear; and that a pixel outside its block does not rise. `counts(loud, cost, r)`
+    /// gives the counts from its loud or quiet pilot and the costs `cost`.
+    fn check_own_pilot_unread(
+        (w, h, x, y): (usize, usize, usize, usize),
+        rise: u32,
+        counts: impl Fn(bool, &[f64], usize) -> Vec<u32>,
+    ) {
         let cost = vec![1.0; w * h];
+        let mut costly = cost.clone();
+        costly[y * w + x] = 50.0;
         for r in 1..=3 {
-            let quiet = extra_counts(w, h, r, &spike(w, h, x, y, 0.01), &cost, 12);
-            let loud = extra_counts(w, h, r, &spike(w, h, x, y, 1e4), &cost, 12);
-            let mut costly = cost.clone();
-            costly[y * w + x] = 50.0;
-            let dear = extra_counts(w, h, r, &spike(w, h, x, y, 0.01), &costly, 12);
-            // The noisy pixel's own count is the same; its neighbours' counts rise, and
-            // fall when the pixel is dear.
+            let quiet = counts(false, &cost, r);
+            let loud = counts(true, &cost, r);
+            let dear = counts(false, &costly, r);
             assert_eq!(quiet[y * w + x], loud[y * w + x], "radius {r}");
             assert_eq!(quiet[y * w + x], dear[y * w + x], "radius {r}");
             for (a, b) in block(x, y, w, h, r).filter(|&q| q != (x, y)) {
                 let p = b * w + a;
                 assert!(
-                    loud[p] > 4 * quiet[p],
+                    loud[p] > rise * quiet[p],
                     "radius {r}, neighbour ({a}, {b}): {} vs {}",
                     loud[p],
                     quiet[p]
@@ -526,13 +530,21 @@ mod tests {
                     quiet[p]
                 );
             }
-            // A pixel outside the block is not the spike's neighbour: its count does
-            // not rise.
-            assert!(
-                loud[(y * w + x) - r - 1] <= quiet[(y * w + x) - r - 1],
-                "radius {r}"
-            );
+            // A pixel outside the block is not the pixel's neighbour: its count does not
+            // rise.
+            let outside = (y * w + x) - r - 1;
+            assert!(loud[outside] <= quiet[outside], "radius {r}");
         }
+    }
+
+    #[test]
+    fn a_pixels_count_does_not_read_its_own_pilot() {
+        // Large enough that the spike's neighbourhood is a small part of the image.
+        let (w, h, x, y) = (31, 27, 15, 13);
+        check_own_pilot_unread((w, h, x, y), 4, |loud, cost, r| {
+            let v = if loud { 1e4 } else { 0.01 };
+            extra_counts(w, h, r, &spike(w, h, x, y, v), cost, 12)
+        });
     }
 
     #[test]
@@ -736,7 +748,6 @@ mod tests {
     #[test]
     fn a_pixels_count_does_not_read_its_own_sample_after_a_pilot_of_one() {
         let (w, h, x, y) = (31, 27, 15, 13);
-        let cost = vec![1.0; w * h];
         // Samples that vary a little everywhere, and one that stands out.
         let samples = |v: f32| -> Vec<Color> {
             (0..w * h)
@@ -746,34 +757,10 @@ mod tests {
                 })
                 .collect()
         };
-        for r in 1..=3 {
-            let quiet = extra_counts_from_samples(w, h, r, &samples(0.06), &cost, 12);
-            let loud = extra_counts_from_samples(w, h, r, &samples(1e3), &cost, 12);
-            let mut costly = cost.clone();
-            costly[y * w + x] = 50.0;
-            let dear = extra_counts_from_samples(w, h, r, &samples(0.06), &costly, 12);
-            // The pixel's own count is the same; its neighbours' rise with its sample, and
-            // fall when it is dear.
-            assert_eq!(quiet[y * w + x], loud[y * w + x], "radius {r}");
-            assert_eq!(quiet[y * w + x], dear[y * w + x], "radius {r}");
-            for (a, b) in block(x, y, w, h, r).filter(|&q| q != (x, y)) {
-                let p = b * w + a;
-                assert!(
-                    loud[p] > 2 * quiet[p],
-                    "radius {r}, neighbour ({a}, {b}): {} vs {}",
-                    loud[p],
-                    quiet[p]
-                );
-                assert!(
-                    dear[p] < quiet[p],
-                    "radius {r}, neighbour ({a}, {b}): {} vs {}",
-                    dear[p],
-                    quiet[p]
-                );
-            }
-            let outside = (y * w + x) - r - 1;
-            assert!(loud[outside] <= quiet[outside], "radius {r}");
-        }
+        check_own_pilot_unread((w, h, x, y), 2, |loud, cost, r| {
+            let v = if loud { 1e3 } else { 0.06 };
+            extra_counts_from_samples(w, h, r, &samples(v), cost, 12)
+        });
     }
 
     #[test]
