@@ -104,7 +104,7 @@ pub const SPREAD_UP_TO: u32 = 16;
 /// plain render's; at 3 to 16 spp 0.38–1.02 of the previous pilots' (2 at 3 and 4 spp, 3
 /// at 5, then a quarter, at least 4), at most 1.016 on any scene; at 32 and 64 spp better
 /// on six scenes (0.65–0.98) but 1.01–1.03 on the two whose noise covers the image, and
-/// 5–8 % slower at 128 and 256 spp.
+/// at 128 and 256 spp up to 10 % slower on seven.
 pub fn pilot(spp: u32) -> Option<u32> {
     match spp {
         0..=1 => None,
