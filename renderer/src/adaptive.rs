@@ -55,11 +55,12 @@ pub const NEIGHBOURHOOD_SAMPLES: u32 = 64;
 /// [`NEIGHBOURHOOD_SAMPLES`] pilot samples. A variance from fewer misses noisy pixels (a
 /// light's edge whose neighbours' pilots happened to be quiet); one from farther than it
 /// needs blurs the noise's picture. Measured with `sobol`, five or six seeds each, at 16
-/// spp with a pilot of 4 (the rule before the pilot of one): the 5 × 5 block cut the squared error of the glass and mirror
-/// scenes by 11–12 % at 256² (7 % at 128²) and the Cornell box's by 5 % at 256², and on
-/// the area-light scene it took away the seeds whose error was 4–36 times the others' (a
-/// light's edge left with the even share); with a pilot of 8 or 16 it was 2–4 % worse
-/// than the 8 neighbours (renderer/docs/performance.md).
+/// spp with a pilot of 4 (the rule before the pilot of one): the 5 × 5 block cut the
+/// squared error of the glass and mirror scenes by 11–12 % at 256² (7 % at 128²) and the
+/// Cornell box's by 5 % at 256², and on the area-light scene it took away the seeds whose
+/// error was 4–36 times the others' (a light's edge left with the even share); with a
+/// pilot of 8 or 16 it was 2–4 % worse than the 8 neighbours
+/// (renderer/docs/performance.md).
 pub fn radius(pilot: u32) -> usize {
     if pilot == 1 {
         return SPREAD_RADIUS;
