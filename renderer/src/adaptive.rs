@@ -205,28 +205,33 @@ pub fn extra_counts_from_samples(
 
 /// Each pixel's extra count from the pixels' scores, as [`extra_counts`] says.
 fn share_out(w: usize, h: usize, r: usize, score: &[f64], extra: u32) -> Vec<u32> {
-    let outside = Outside::new(w, h, score);
+    let outside = Outside::new(w, h, r, score);
     let extra = extra as f64;
-    (0..w * h)
-        .into_par_iter()
-        .map(|p| {
-            let (i, j) = (p % w, p / w);
-            let block = Block::new(i, j, w, h, r);
-            let rest = w * h - block.len();
-            let mean = if rest > 0 {
-                outside.sum(&block) / rest as f64
-            } else {
-                0.0
-            };
-            let share = if mean > 0.0 {
-                EVEN_SHARE + (1.0 - EVEN_SHARE) * score[p] / mean
-            } else {
-                1.0
-            };
-            let x = (extra * share).min(MAX_FACTOR * extra).min(MAX_EXTRA);
-            (x + round_up_chance(p)).floor() as u32
-        })
-        .collect()
+    let mut counts = vec![0; w * h];
+    counts.par_chunks_mut(w.max(1)).enumerate().for_each_init(
+        BlockRows::default,
+        |rows, (j, row)| {
+            outside.rows_of(j, rows);
+            for (i, count) in row.iter_mut().enumerate() {
+                let p = j * w + i;
+                let block = Block::new(i, j, w, h, r);
+                let rest = w * h - block.len();
+                let mean = if rest > 0 {
+                    outside.sum(&block, rows) / rest as f64
+                } else {
+                    0.0
+                };
+                let share = if mean > 0.0 {
+                    EVEN_SHARE + (1.0 - EVEN_SHARE) * score[p] / mean
+                } else {
+                    1.0
+                };
+                let x = (extra * share).min(MAX_FACTOR * extra).min(MAX_EXTRA);
+                *count = (x + round_up_chance(p)).floor() as u32;
+            }
+        },
+    );
+    counts
 }
 
 /// Each pixel's score σ/√c for [`extra_counts`], from its neighbours within `r` (not
@@ -290,7 +295,7 @@ pub(crate) fn spread_scores(
             cost: cost[p],
         }
     };
-    neighbour_sums(w, h, r, item, |sum, n| {
+    block_sums(w, h, r, item, |sum, n| {
         if n < 2 || !(sum.cost > 0.0) {
             return 0.0;
         }
@@ -366,6 +371,61 @@ fn neighbour_sums<T: Copy + Default + std::ops::AddAssign>(
         .collect()
 }
 
+/// For each pixel p, `score(sum, n)` of the sum of `item(q)` over the `n` pixels q of p's
+/// block of radius `r` other than p, as [`neighbour_sums`] gives it but added up in an
+/// order that neighbouring pixels share, so that a pixel costs a few additions, not one
+/// for each of its neighbours (a 5 × 5 block: 24). For p's row, each column's sum over the
+/// block's rows other than p's, top to bottom (`rows_by`), and that plus p's row
+/// (`column`); p's sum is `column`'s sum over the columns left of p, left to right, plus
+/// the same right of p, plus its own column's `rows_by`. A column outside the image adds
+/// a zero, which changes no sum, so every pixel's sum is one fixed sum of its neighbours:
+/// the same bits whatever the threads, and never p's own item, not even through rounding
+/// (nothing is taken away). Its bits differ from [`neighbour_sums`]' in the last places at
+/// most, which changes a count only where its share rounds across a whole number; none
+/// changed in 25 adaptive renders at 2 to 16 spp (renderer/docs/performance.md,
+/// 2026-11-29 evening).
+fn block_sums<T: Copy + Default + Send + std::ops::AddAssign>(
+    w: usize,
+    h: usize,
+    r: usize,
+    item: impl Fn(usize) -> T + Sync,
+    score: impl Fn(T, usize) -> f64 + Sync,
+) -> Vec<f64> {
+    let mut out = vec![0.0; w * h];
+    // Each row's columns, with `r` zeros at either end.
+    let scratch = || (vec![T::default(); w + 2 * r], vec![T::default(); w + 2 * r]);
+    out.par_chunks_mut(w.max(1)).enumerate().for_each_init(
+        scratch,
+        |(rows_by, column), (j, out)| {
+            let others = j.saturating_sub(r)..j;
+            let below = j + 1..(j + r + 1).min(h);
+            for i in 0..w {
+                let mut sum = T::default();
+                for b in others.clone().chain(below.clone()) {
+                    sum += item(b * w + i);
+                }
+                rows_by[r + i] = sum;
+                sum += item(j * w + i);
+                column[r + i] = sum;
+            }
+            for (i, out) in out.iter_mut().enumerate() {
+                let mut left = T::default();
+                for x in &column[i..r + i] {
+                    left += *x;
+                }
+                let mut right = T::default();
+                for x in &column[r + i + 1..2 * r + i + 1] {
+                    right += *x;
+                }
+                left += right;
+                left += rows_by[r + i];
+                *out = score(left, Block::new(i, j, w, h, r).len() - 1);
+            }
+        },
+    );
+    out
+}
+
 /// A number in [0, 1) from the pixel's index alone, for rounding its count: a hash of its
 /// own (not any sampler's numbers, which would be the pixel's own samples).
 fn round_up_chance(p: usize) -> f64 {
@@ -377,55 +437,94 @@ fn round_up_chance(p: usize) -> f64 {
 /// whole rows), and in each of its rows the columns left and right of it (prefix and
 /// suffix sums within the row). A total less the block's sum would read the block's
 /// scores through its rounding.
-struct Outside {
+struct Outside<'a> {
     w: usize,
+    h: usize,
+    r: usize,
+    score: &'a [f64],
     /// Sum of the rows before row b, for b in 0..=h.
     rows_before: Vec<f64>,
     /// Sum of the rows from row b on, for b in 0..=h.
     rows_from: Vec<f64>,
-    /// Row b's sum of the columns before column a, at b·(w + 1) + a.
-    cols_before: Vec<f64>,
-    /// Row b's sum of the columns from column a on, at b·(w + 1) + a.
-    cols_from: Vec<f64>,
 }
 
-impl Outside {
-    fn new(w: usize, h: usize, score: &[f64]) -> Self {
-        let mut cols_before = vec![0.0; (w + 1) * h];
-        let mut cols_from = vec![0.0; (w + 1) * h];
-        for b in 0..h {
-            let (row, at) = (&score[b * w..(b + 1) * w], b * (w + 1));
-            for a in 0..w {
-                cols_before[at + a + 1] = cols_before[at + a] + row[a];
-                cols_from[at + w - a - 1] = cols_from[at + w - a] + row[w - a - 1];
-            }
-        }
-        let row_sum = |b: usize| cols_before[b * (w + 1) + w];
+impl<'a> Outside<'a> {
+    /// For the blocks of radius `r` in the `w` × `h` image of scores `score`.
+    fn new(w: usize, h: usize, r: usize, score: &'a [f64]) -> Self {
+        // Each row's sum, left to right.
+        let row_sum: Vec<f64> = (0..h)
+            .into_par_iter()
+            .map(|b| score[b * w..(b + 1) * w].iter().fold(0.0, |s, x| s + x))
+            .collect();
         let mut rows_before = vec![0.0; h + 1];
         let mut rows_from = vec![0.0; h + 1];
         for b in 0..h {
-            rows_before[b + 1] = rows_before[b] + row_sum(b);
-            rows_from[h - b - 1] = rows_from[h - b] + row_sum(h - b - 1);
+            rows_before[b + 1] = rows_before[b] + row_sum[b];
+            rows_from[h - b - 1] = rows_from[h - b] + row_sum[h - b - 1];
         }
         Outside {
             w,
+            h,
+            r,
+            score,
             rows_before,
             rows_from,
-            cols_before,
-            cols_from,
         }
     }
 
-    /// The sum of the scores outside `block`.
-    fn sum(&self, block: &Block) -> f64 {
-        let Block { cols, rows } = block;
-        let mut s = self.rows_before[rows.start] + self.rows_from[rows.end];
-        for b in rows.clone() {
-            let at = b * (self.w + 1);
-            s += self.cols_before[at + cols.start] + self.cols_from[at + cols.end];
+    /// Makes `rows` hold, for each row b of the blocks of row `j`'s pixels, its sums of the
+    /// columns before column a (at a, for a in 0..=w), then of the columns from column a
+    /// on (at w + 1 + a). Each row's sums are taken where they are needed and kept while
+    /// the next image rows need them (2r + 1 rows: the next row's blocks share all but
+    /// one), not kept for the whole image: the same sums, in less fresh memory (a page the
+    /// kernel maps the first time it is written costs more than adding a row up again).
+    fn rows_of(&self, j: usize, rows: &mut BlockRows) {
+        let (w, slots) = (self.w, 2 * self.r + 1);
+        let stride = 2 * (w + 1);
+        if rows.held.len() != slots {
+            rows.held = vec![None; slots];
+            rows.sums = vec![0.0; slots * stride];
+        }
+        rows.at.clear();
+        for b in Block::new(0, j, w, self.h, self.r).rows {
+            let slot = b % slots;
+            let out = &mut rows.sums[slot * stride..(slot + 1) * stride];
+            if rows.held[slot] != Some(b) {
+                let row = &self.score[b * w..(b + 1) * w];
+                let (before, from) = out.split_at_mut(w + 1);
+                for a in 0..w {
+                    before[a + 1] = before[a] + row[a];
+                    from[w - a - 1] = from[w - a] + row[w - a - 1];
+                }
+                rows.held[slot] = Some(b);
+            }
+            rows.at.push(slot * stride);
+        }
+    }
+
+    /// The sum of the scores outside `block`, a block of a pixel of the row whose
+    /// [`Outside::rows_of`] `rows` holds.
+    fn sum(&self, block: &Block, rows: &BlockRows) -> f64 {
+        let Block { cols, rows: ends } = block;
+        let mut s = self.rows_before[ends.start] + self.rows_from[ends.end];
+        for &at in &rows.at {
+            s += rows.sums[at + cols.start] + rows.sums[at + self.w + 1 + cols.end];
         }
         s
     }
+}
+
+/// The prefix and suffix sums of the rows one image row's blocks cover ([`Outside::rows_of`]),
+/// in 2r + 1 slots, row b in slot b mod (2r + 1): for one [`Outside`] (another's scores
+/// would find these rows held).
+#[derive(Default)]
+struct BlockRows {
+    /// The image row each slot holds.
+    held: Vec<Option<usize>>,
+    /// Each slot's sums before each column, then from each column.
+    sums: Vec<f64>,
+    /// Where the current image row's block rows start in `sums`, top to bottom.
+    at: Vec<usize>,
 }
 
 /// The block of radius `r` around (i, j) (3 × 3 for 1), cut at the image's edges: its
@@ -619,8 +718,11 @@ mod tests {
         let (w, h) = (7, 5);
         let score: Vec<f64> = (0..w * h).map(|p| (p * p % 13) as f64 + 0.5).collect();
         for r in 1..=3 {
-            let outside = Outside::new(w, h, &score);
-            for j in 0..h {
+            let outside = Outside::new(w, h, r, &score);
+            // Rows down, up and out of order: `BlockRows` keeps rows from one to the next.
+            let mut sums = BlockRows::default();
+            for j in (0..h).chain((0..h).rev()).chain([1, 4, 0, 3]) {
+                outside.rows_of(j, &mut sums);
                 for i in 0..w {
                     let inside: Vec<_> = block(i, j, w, h, r).collect();
                     let want: f64 = (0..w * h)
@@ -628,22 +730,28 @@ mod tests {
                         .map(|p| score[p])
                         .sum();
                     assert_eq!(
-                        outside.sum(&Block::new(i, j, w, h, r)),
+                        outside.sum(&Block::new(i, j, w, h, r), &sums),
                         want,
                         "radius {r}, pixel ({i}, {j})"
                     );
                 }
             }
-            // Changing a score inside the block leaves the sum's bits as they were.
+            // Changing a score inside the block leaves the sum's bits as they were; one
+            // outside it changes them.
+            let sum = |score: &[f64]| {
+                let outside = Outside::new(w, h, r, score);
+                let mut sums = BlockRows::default();
+                outside.rows_of(2, &mut sums);
+                outside.sum(&Block::new(3, 2, w, h, r), &sums).to_bits()
+            };
             let mut other = score.clone();
             other[(2 + r).min(h - 1) * w + (3 + r).min(w - 1)] = 1e17;
-            assert_eq!(
-                Outside::new(w, h, &other)
-                    .sum(&Block::new(3, 2, w, h, r))
-                    .to_bits(),
-                outside.sum(&Block::new(3, 2, w, h, r)).to_bits(),
-                "radius {r}"
-            );
+            assert_eq!(sum(&other), sum(&score), "radius {r}");
+            let mut other = score.clone();
+            other[2 * w] = 1e17;
+            if r < 3 {
+                assert_ne!(sum(&other), sum(&score), "radius {r}");
+            }
         }
     }
 
@@ -670,16 +778,24 @@ mod tests {
         }
     }
 
+    /// Images whose blocks are cut by every edge, and smaller than the blocks.
+    const SIZES: [(usize, usize); 5] = [(11, 9), (1, 7), (7, 1), (3, 2), (1, 1)];
+
+    /// `n` positive values of many sizes, so that a sum's order shows in its bits.
+    fn values(n: usize) -> Vec<f64> {
+        (0..n)
+            .map(|p| ((p * 7919) % 101) as f64 / 7.0 + 1e-3)
+            .collect()
+    }
+
     #[test]
     fn scores_add_the_neighbours_up_row_by_row() {
         // Each score's bits are those of the neighbours' sums taken row by row, left to
         // right, the pixel itself left out: the order the adaptive counts were measured
         // with (a change of order changes some counts, and so the image). Blocks cut by
         // every edge, and blocks larger than the image.
-        for (w, h) in [(11, 9), (1, 7), (7, 1), (3, 2), (1, 1)] {
-            let var: Vec<f64> = (0..w * h)
-                .map(|p| ((p * 7919) % 101) as f64 / 7.0 + 1e-3)
-                .collect();
+        for (w, h) in SIZES {
+            let var = values(w * h);
             let cost: Vec<f64> = (0..w * h)
                 .map(|p| 1.0 + ((p * 31) % 13) as f64 / 3.0)
                 .collect();
@@ -703,6 +819,40 @@ mod tests {
                         want.to_bits(),
                         "{w} x {h}, radius {r}, pixel ({i}, {j})"
                     );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn block_sums_add_columns_then_the_columns_left_and_right() {
+        // Each sum's bits are those of the order `block_sums` documents: each column's
+        // rows other than the pixel's, top to bottom (`by`); the columns left of the pixel
+        // and right of it, each with the pixel's row added last; then its own column's
+        // `by`. The pixel itself is never added. Blocks cut by every edge, and blocks
+        // larger than the image.
+        for (w, h) in SIZES {
+            let v = values(w * h);
+            for r in 1..=4 {
+                let got = block_sums(w, h, r, |p| v[p], |s, _| s);
+                let counts = block_sums(w, h, r, |p| v[p], |_, n| n as f64);
+                for p in 0..w * h {
+                    let (i, j) = (p % w, p / w);
+                    let Block { cols, rows } = Block::new(i, j, w, h, r);
+                    let by = |a: usize| {
+                        let others = rows.clone().filter(|&b| b != j);
+                        others.fold(0.0, |s, b| s + v[b * w + a])
+                    };
+                    let column = |a: usize| by(a) + v[j * w + a];
+                    let left = (cols.start..i).fold(0.0, |s, a| s + column(a));
+                    let right = (i + 1..cols.end).fold(0.0, |s, a| s + column(a));
+                    let want = (left + right) + by(i);
+                    assert_eq!(
+                        got[p].to_bits(),
+                        want.to_bits(),
+                        "{w} x {h}, radius {r}, pixel ({i}, {j})"
+                    );
+                    assert_eq!(counts[p], (cols.len() * rows.len() - 1) as f64);
                 }
             }
         }

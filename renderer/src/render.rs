@@ -204,20 +204,21 @@ fn render_adaptive(
     let w = t.w;
     let h = rgb.len() / (3 * w.max(1));
     let passes = Pass::adaptive(t.kind, pilot, (w * h) as u64);
-    // The pilot: each pixel's sum, variance and cost, and its products' sums when the
-    // moments are wanted (kept only then: at the pixel limit every byte a pixel counts).
+    // The pilot: each pixel's sum and cost; its variance after a pilot of more than one
+    // (one sample has none: its neighbours' samples score it); and its products' sums
+    // when the moments are wanted. Each is kept only where it is used: at the pixel limit
+    // every byte a pixel counts, and each page of a fresh buffer costs the kernel's time
+    // to map it (renderer/docs/performance.md, 2026-11-29 evening).
     let wants_sq = moment_rows.iter().any(|m| !m.is_empty());
+    let wants_var = pilot > 1;
     let mut sums = vec![Color::ZERO; w * h];
-    let mut variance = vec![0f64; w * h];
+    let mut variance = vec![0f64; if wants_var { w * h } else { 0 }];
     let mut cost = vec![0f64; w * h];
     let mut pilot_sq = vec![[0f64; 6]; if wants_sq { w * h } else { 0 }];
-    let mut sq_rows: Vec<&mut [[f64; 6]]> = if wants_sq {
-        pilot_sq.chunks_mut(w).collect()
-    } else {
-        (0..h).map(|_| -> &mut [[f64; 6]] { &mut [] }).collect()
-    };
+    let mut var_rows = rows_if(wants_var, &mut variance, w, h);
+    let mut sq_rows = rows_if(wants_sq, &mut pilot_sq, w, h);
     sums.par_chunks_mut(w)
-        .zip(variance.par_chunks_mut(w))
+        .zip(var_rows.par_iter_mut())
         .zip(cost.par_chunks_mut(w))
         .zip(sq_rows.par_iter_mut())
         .enumerate()
@@ -227,10 +228,12 @@ fn render_adaptive(
                 j,
                 passes[0],
                 Counts::Every(pilot),
-                true,
+                wants_var || wants_sq,
                 &mut |i, _, sum, sq, d| {
                     s[i] = sum;
-                    v[i] = adaptive::variance(sum, sq, pilot);
+                    if let Some(v) = v.get_mut(i) {
+                        *v = adaptive::variance(sum, sq, pilot);
+                    }
                     c[i] = adaptive::cost(d, pilot);
                     if let Some(q) = q.get_mut(i) {
                         *q = *sq;
@@ -239,7 +242,7 @@ fn render_adaptive(
             );
             bar.row_done();
         });
-    drop(sq_rows);
+    drop((var_rows, sq_rows));
     let extra =
         adaptive::extra_counts_after_pilot(w, h, pilot, &sums, &variance, &cost, spp - pilot);
     let samples = (w * h) as u64 * pilot as u64 + extra.iter().map(|&k| k as u64).sum::<u64>();
@@ -286,6 +289,16 @@ fn render_adaptive(
         })
         .sum();
     (bad, samples)
+}
+
+/// `buffer`'s `h` rows of `w` items when it is `wanted`, else `h` empty rows (`buffer` is
+/// then empty: a row's writes go nowhere).
+fn rows_if<T>(wanted: bool, buffer: &mut [T], w: usize, h: usize) -> Vec<&mut [T]> {
+    if wanted {
+        buffer.chunks_mut(w.max(1)).collect()
+    } else {
+        (0..h).map(|_| -> &mut [T] { &mut [] }).collect()
+    }
 }
 
 /// Where a pass's samples come from: the samplers of pixel numbers `stream + j·w + i`,

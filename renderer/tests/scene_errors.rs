@@ -165,7 +165,7 @@ fn test11_render_settings_are_validated() {
             .replace("height = 8", "height = 1000000"),
         10,
         "render.width",
-        "more than the limit of 134217728 (2^27): a render could need 176000.0 GB",
+        "more than the limit of 134217728 (2^27): a render could need 168000.0 GB",
     );
     let text = format!("{CAMERA}samples = 0\n");
     check(&text, 12, "render.samples", "at least 1");

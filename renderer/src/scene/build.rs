@@ -24,22 +24,22 @@ use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
 /// The largest image, in pixels: 2²⁷ (for example 16384 × 8192). At
-/// [`PEAK_BYTES_PER_PIXEL`] the largest could need 23.6 GB.
+/// [`PEAK_BYTES_PER_PIXEL`] the largest could need 22.5 GB.
 pub const MAX_PIXELS: u64 = 1 << 27;
 
 /// The most memory a render and its output take per pixel, in bytes, at their peak: the
 /// image's RGB and AOVs; the second moments; adaptive sampling's pilot and scores between
 /// its passes; the light paths' image; and the EXR writer's copy of every channel. Measured
-/// with a counting allocator, the worst case (adaptive, AOVs, moments, EXR) takes 171
-/// bytes a pixel; a PNG 17 to 68, an EXR with AOVs 87 to 89 (renderer/tests/memory.rs,
+/// with a counting allocator, the worst case (adaptive, AOVs, moments, EXR) takes 165.6
+/// bytes a pixel; a PNG 17 to 64, an EXR with AOVs 88 to 90 (renderer/tests/memory.rs,
 /// which fails when a render takes more than this, or much less).
-pub const PEAK_BYTES_PER_PIXEL: u64 = 176;
+pub const PEAK_BYTES_PER_PIXEL: u64 = 168;
 
 /// The most memory a render takes per row of the image beyond its pixels', in bytes: the
-/// rows' slices of the image and its moments, adaptive sampling's sums of whole rows and
-/// its prefix sums' one more column. It counts where an image is a few pixels wide
-/// (renderer/tests/memory.rs: 209.7 bytes a row one pixel wide, 171 of them the pixel's).
-pub const PEAK_BYTES_PER_ROW: u64 = 48;
+/// rows' slices of the image and its moments, adaptive sampling's sums of whole rows. It
+/// counts where an image is a few pixels wide (renderer/tests/memory.rs: 172.3 bytes a
+/// row one pixel wide, 165.6 of them the pixel's).
+pub const PEAK_BYTES_PER_ROW: u64 = 16;
 
 /// Bytes a render of `width` × `height` pixels may need at its peak
 /// ([`PEAK_BYTES_PER_PIXEL`], [`PEAK_BYTES_PER_ROW`]).
