@@ -211,16 +211,11 @@ fn share_out(w: usize, h: usize, r: usize, score: &[f64], extra: u32) -> Vec<u32
     counts.par_chunks_mut(w.max(1)).enumerate().for_each_init(
         BlockRows::default,
         |rows, (j, row)| {
-            outside.rows_of(j, rows);
-            for (i, count) in row.iter_mut().enumerate() {
+            let sums = outside.row(j, rows);
+            for (i, (count, sum)) in row.iter_mut().zip(sums).enumerate() {
                 let p = j * w + i;
-                let block = Block::new(i, j, w, h, r);
-                let rest = w * h - block.len();
-                let mean = if rest > 0 {
-                    outside.sum(&block, rows) / rest as f64
-                } else {
-                    0.0
-                };
+                let rest = w * h - Block::new(i, j, w, h, r).len();
+                let mean = if rest > 0 { sum / rest as f64 } else { 0.0 };
                 let share = if mean > 0.0 {
                     EVEN_SHARE + (1.0 - EVEN_SHARE) * score[p] / mean
                 } else {
@@ -502,15 +497,34 @@ impl<'a> Outside<'a> {
         }
     }
 
-    /// The sum of the scores outside `block`, a block of a pixel of the row whose
-    /// [`Outside::rows_of`] `rows` holds.
-    fn sum(&self, block: &Block, rows: &BlockRows) -> f64 {
-        let Block { cols, rows: ends } = block;
-        let mut s = self.rows_before[ends.start] + self.rows_from[ends.end];
+    /// The sums of the scores outside the blocks of row `j`'s pixels, left to right (in
+    /// `rows`, which [`Outside::rows_of`] fills). Each is the rows above and below the
+    /// block, then for each of the block's rows, top to bottom, its columns left of the
+    /// block plus those right of it. Added up for the whole row one block row at a time,
+    /// so that the pixels whose blocks the image's edges do not cut run in lanes; each
+    /// pixel's sum is added in the same order as alone.
+    fn row<'r>(&self, j: usize, rows: &'r mut BlockRows) -> &'r [f64] {
+        self.rows_of(j, rows);
+        let (w, r) = (self.w, self.r);
+        let ends = Block::new(0, j, w, self.h, r).rows;
+        let out = &mut rows.outside;
+        out.clear();
+        out.resize(w, self.rows_before[ends.start] + self.rows_from[ends.end]);
+        // The pixels whose blocks reach neither side: columns i − r to i + r.
+        let inner = r.min(w)..w.saturating_sub(r).max(r.min(w));
         for &at in &rows.at {
-            s += rows.sums[at + cols.start] + rows.sums[at + self.w + 1 + cols.end];
+            let (before, from) = rows.sums[at..at + 2 * (w + 1)].split_at(w + 1);
+            for i in (0..inner.start).chain(inner.end..w) {
+                out[i] += before[i.saturating_sub(r)] + from[(i + r + 1).min(w)];
+            }
+            let lanes = out[inner.clone()].iter_mut();
+            let left = &before[inner.start - r.min(inner.start)..];
+            let right = &from[(inner.start + r + 1).min(w)..];
+            for ((o, b), f) in lanes.zip(left).zip(right) {
+                *o += *b + *f;
+            }
         }
-        s
+        &rows.outside
     }
 }
 
@@ -525,6 +539,8 @@ struct BlockRows {
     sums: Vec<f64>,
     /// Where the current image row's block rows start in `sums`, top to bottom.
     at: Vec<usize>,
+    /// The current image row's sums outside each pixel's block ([`Outside::row`]).
+    outside: Vec<f64>,
 }
 
 /// The block of radius `r` around (i, j) (3 × 3 for 1), cut at the image's edges: its
@@ -715,34 +731,29 @@ mod tests {
 
     #[test]
     fn outside_sums_leave_the_block_out() {
-        let (w, h) = (7, 5);
+        // Wide enough for pixels in lanes between the edges' at every radius.
+        let (w, h) = (13, 5);
         let score: Vec<f64> = (0..w * h).map(|p| (p * p % 13) as f64 + 0.5).collect();
         for r in 1..=3 {
             let outside = Outside::new(w, h, r, &score);
             // Rows down, up and out of order: `BlockRows` keeps rows from one to the next.
             let mut sums = BlockRows::default();
             for j in (0..h).chain((0..h).rev()).chain([1, 4, 0, 3]) {
-                outside.rows_of(j, &mut sums);
+                let got = outside.row(j, &mut sums).to_vec();
                 for i in 0..w {
                     let inside: Vec<_> = block(i, j, w, h, r).collect();
                     let want: f64 = (0..w * h)
                         .filter(|p| !inside.contains(&(p % w, p / w)))
                         .map(|p| score[p])
                         .sum();
-                    assert_eq!(
-                        outside.sum(&Block::new(i, j, w, h, r), &sums),
-                        want,
-                        "radius {r}, pixel ({i}, {j})"
-                    );
+                    assert_eq!(got[i], want, "radius {r}, pixel ({i}, {j})");
                 }
             }
             // Changing a score inside the block leaves the sum's bits as they were; one
             // outside it changes them.
             let sum = |score: &[f64]| {
                 let outside = Outside::new(w, h, r, score);
-                let mut sums = BlockRows::default();
-                outside.rows_of(2, &mut sums);
-                outside.sum(&Block::new(3, 2, w, h, r), &sums).to_bits()
+                outside.row(2, &mut BlockRows::default())[3].to_bits()
             };
             let mut other = score.clone();
             other[(2 + r).min(h - 1) * w + (3 + r).min(w - 1)] = 1e17;
@@ -751,6 +762,42 @@ mod tests {
             other[2 * w] = 1e17;
             if r < 3 {
                 assert_ne!(sum(&other), sum(&score), "radius {r}");
+            }
+        }
+    }
+
+    #[test]
+    fn outside_sums_add_rows_then_each_block_rows_sides() {
+        // Each sum's bits are those of the order the counts were measured with: the rows
+        // above the block plus those below it (each row left to right, the rows top to
+        // bottom, and those below from the bottom up), then for each block row, top to
+        // bottom, its columns left of the block (left to right) plus those right of it
+        // (right to left).
+        for (w, h) in SIZES.into_iter().chain([(13, 6)]) {
+            let score = values(w * h);
+            let row = |b: usize| &score[b * w..(b + 1) * w];
+            let before = |b: usize, a: usize| row(b)[..a].iter().fold(0.0, |s, x| s + x);
+            let from = |b: usize, a: usize| row(b)[a..].iter().rev().fold(0.0, |s, x| s + x);
+            let rows_before = |e: usize| (0..e).fold(0.0, |s, b| s + before(b, w));
+            let rows_from = |e: usize| (e..h).rev().fold(0.0, |s, b| s + before(b, w));
+            for r in 1..=4 {
+                let outside = Outside::new(w, h, r, &score);
+                let mut rows = BlockRows::default();
+                for j in 0..h {
+                    let got = outside.row(j, &mut rows);
+                    for (i, got) in got.iter().enumerate() {
+                        let Block { cols, rows: ends } = Block::new(i, j, w, h, r);
+                        let mut want = rows_before(ends.start) + rows_from(ends.end);
+                        for b in ends {
+                            want += before(b, cols.start) + from(b, cols.end);
+                        }
+                        assert_eq!(
+                            got.to_bits(),
+                            want.to_bits(),
+                            "{w} x {h}, radius {r}, pixel ({i}, {j})"
+                        );
+                    }
+                }
             }
         }
     }
