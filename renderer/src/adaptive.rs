@@ -116,8 +116,9 @@ pub fn pilot(spp: u32) -> Option<u32> {
 
 /// The extra samples of each pixel after a pilot of `pilot` samples a pixel, from the
 /// pilot's `sums` (each pixel's sample, after a pilot of one: [`extra_counts_from_samples`])
-/// or its `variance`s ([`extra_counts`]), and its `cost`s, for `extra` more samples a pixel
-/// on average, in neighbourhoods of [`radius`]`(pilot)`.
+/// or its `variance`s ([`extra_counts`]; not read after a pilot of one, and may then be
+/// empty), and its `cost`s, for `extra` more samples a pixel on average, in neighbourhoods
+/// of [`radius`]`(pilot)`.
 pub fn extra_counts_after_pilot(
     w: usize,
     h: usize,
@@ -209,9 +210,9 @@ fn share_out(w: usize, h: usize, r: usize, score: &[f64], extra: u32) -> Vec<u32
     let extra = extra as f64;
     let mut counts = vec![0; w * h];
     counts.par_chunks_mut(w.max(1)).enumerate().for_each_init(
-        BlockRows::default,
+        || BlockRows::new(&outside),
         |rows, (j, row)| {
-            let sums = outside.row(j, rows);
+            let sums = rows.row(j);
             for (i, (count, sum)) in row.iter_mut().zip(sums).enumerate() {
                 let p = j * w + i;
                 let rest = w * h - Block::new(i, j, w, h, r).len();
@@ -377,7 +378,7 @@ fn neighbour_sums<T: Copy + Default + std::ops::AddAssign>(
 /// the same bits whatever the threads, and never p's own item, not even through rounding
 /// (nothing is taken away). Its bits differ from [`neighbour_sums`]' in the last places at
 /// most, which changes a count only where its share rounds across a whole number; none
-/// changed in 47 adaptive renders of five bench scenes at 2 to 24 spp, three samplers
+/// changed in 33 adaptive renders of five bench scenes at 2 to 16 spp, three samplers
 /// (renderer/docs/performance.md, "The step between the adaptive passes made cheaper").
 fn block_sums<T: Copy + Default + Send + std::ops::AddAssign>(
     w: usize,
@@ -466,81 +467,93 @@ impl<'a> Outside<'a> {
             rows_from,
         }
     }
+}
 
-    /// Makes `rows` hold, for each row b of the blocks of row `j`'s pixels, its sums of the
-    /// columns before column a (at a, for a in 0..=w), then of the columns from column a
-    /// on (at w + 1 + a). Each row's sums are taken where they are needed and kept while
-    /// the next image rows need them (2r + 1 rows: the next row's blocks share all but
-    /// one), not kept for the whole image: the same sums, in less fresh memory (a page the
-    /// kernel maps the first time it is written costs more than adding a row up again).
-    fn rows_of(&self, j: usize, rows: &mut BlockRows) {
-        let (w, slots) = (self.w, 2 * self.r + 1);
-        let stride = 2 * (w + 1);
-        if rows.held.len() != slots {
-            rows.held = vec![None; slots];
-            rows.sums = vec![0.0; slots * stride];
+/// The sums outside the blocks of one image row's pixels ([`BlockRows::row`]), from the
+/// prefix and suffix sums of the rows those blocks cover, held in 2r + 1 slots (row b in
+/// slot b mod (2r + 1)) while the next image rows need them: the next row's blocks share
+/// all but one. Not kept for the whole image: the same sums, in less fresh memory (a page
+/// the kernel maps the first time it is written costs more than adding a row up again).
+/// It belongs to one [`Outside`], whose scores it reads.
+struct BlockRows<'o, 'a> {
+    of: &'o Outside<'a>,
+    /// The image row each slot holds.
+    held: Vec<Option<usize>>,
+    /// Each slot's sums of the columns before column a (at a, for a in 0..=w), then of the
+    /// columns from column a on (at w + 1 + a).
+    sums: Vec<f64>,
+    /// Where the current image row's block rows start in `sums`, top to bottom.
+    at: Vec<usize>,
+    /// The current image row's sums outside each pixel's block.
+    outside: Vec<f64>,
+}
+
+impl<'o, 'a> BlockRows<'o, 'a> {
+    fn new(of: &'o Outside<'a>) -> Self {
+        let slots = 2 * of.r + 1;
+        BlockRows {
+            of,
+            held: vec![None; slots],
+            sums: vec![0.0; slots * 2 * (of.w + 1)],
+            at: Vec::with_capacity(slots),
+            outside: Vec::with_capacity(of.w),
         }
-        rows.at.clear();
-        for b in Block::new(0, j, w, self.h, self.r).rows {
+    }
+
+    /// Makes the slots hold the rows of the blocks of row `j`'s pixels, and `at` point
+    /// at them.
+    fn rows_of(&mut self, j: usize) {
+        let Outside { w, h, r, score, .. } = *self.of;
+        let (slots, stride) = (2 * r + 1, 2 * (w + 1));
+        self.at.clear();
+        for b in Block::new(0, j, w, h, r).rows {
             let slot = b % slots;
-            let out = &mut rows.sums[slot * stride..(slot + 1) * stride];
-            if rows.held[slot] != Some(b) {
-                let row = &self.score[b * w..(b + 1) * w];
+            if self.held[slot] != Some(b) {
+                let row = &score[b * w..(b + 1) * w];
+                let out = &mut self.sums[slot * stride..(slot + 1) * stride];
                 let (before, from) = out.split_at_mut(w + 1);
                 for a in 0..w {
                     before[a + 1] = before[a] + row[a];
                     from[w - a - 1] = from[w - a] + row[w - a - 1];
                 }
-                rows.held[slot] = Some(b);
+                self.held[slot] = Some(b);
             }
-            rows.at.push(slot * stride);
+            self.at.push(slot * stride);
         }
     }
 
-    /// The sums of the scores outside the blocks of row `j`'s pixels, left to right (in
-    /// `rows`, which [`Outside::rows_of`] fills). Each is the rows above and below the
-    /// block, then for each of the block's rows, top to bottom, its columns left of the
-    /// block plus those right of it. Added up for the whole row one block row at a time,
-    /// so that the pixels whose blocks the image's edges do not cut run in lanes; each
-    /// pixel's sum is added in the same order as alone.
-    fn row<'r>(&self, j: usize, rows: &'r mut BlockRows) -> &'r [f64] {
-        self.rows_of(j, rows);
-        let (w, r) = (self.w, self.r);
-        let ends = Block::new(0, j, w, self.h, r).rows;
-        let out = &mut rows.outside;
+    /// The sums of the scores outside the blocks of row `j`'s pixels, left to right. Each
+    /// is the rows above and below the block, then for each of the block's rows, top to
+    /// bottom, its columns left of the block plus those right of it. Added up for the
+    /// whole row one block row at a time, so that the pixels whose blocks the image's
+    /// edges do not cut run in lanes; each pixel's sum is added in the same order as
+    /// alone.
+    fn row(&mut self, j: usize) -> &[f64] {
+        self.rows_of(j);
+        let Outside { w, h, r, .. } = *self.of;
+        let ends = Block::new(0, j, w, h, r).rows;
+        let out = &mut self.outside;
         out.clear();
-        out.resize(w, self.rows_before[ends.start] + self.rows_from[ends.end]);
-        // The pixels whose blocks reach neither side: columns i − r to i + r.
+        out.resize(
+            w,
+            self.of.rows_before[ends.start] + self.of.rows_from[ends.end],
+        );
+        // The pixels whose blocks reach neither side: columns i − r to i + r, for i from
+        // r on (their left sides start at column 0).
         let inner = r.min(w)..w.saturating_sub(r).max(r.min(w));
-        for &at in &rows.at {
-            let (before, from) = rows.sums[at..at + 2 * (w + 1)].split_at(w + 1);
+        for &at in &self.at {
+            let (before, from) = self.sums[at..at + 2 * (w + 1)].split_at(w + 1);
             for i in (0..inner.start).chain(inner.end..w) {
                 out[i] += before[i.saturating_sub(r)] + from[(i + r + 1).min(w)];
             }
             let lanes = out[inner.clone()].iter_mut();
-            let left = &before[inner.start - r.min(inner.start)..];
             let right = &from[(inner.start + r + 1).min(w)..];
-            for ((o, b), f) in lanes.zip(left).zip(right) {
+            for ((o, b), f) in lanes.zip(before).zip(right) {
                 *o += *b + *f;
             }
         }
-        &rows.outside
+        &self.outside
     }
-}
-
-/// The prefix and suffix sums of the rows one image row's blocks cover ([`Outside::rows_of`]),
-/// in 2r + 1 slots, row b in slot b mod (2r + 1): for one [`Outside`] (another's scores
-/// would find these rows held).
-#[derive(Default)]
-struct BlockRows {
-    /// The image row each slot holds.
-    held: Vec<Option<usize>>,
-    /// Each slot's sums before each column, then from each column.
-    sums: Vec<f64>,
-    /// Where the current image row's block rows start in `sums`, top to bottom.
-    at: Vec<usize>,
-    /// The current image row's sums outside each pixel's block ([`Outside::row`]).
-    outside: Vec<f64>,
 }
 
 /// The block of radius `r` around (i, j) (3 × 3 for 1), cut at the image's edges: its
@@ -732,14 +745,15 @@ mod tests {
     #[test]
     fn outside_sums_leave_the_block_out() {
         // Wide enough for pixels in lanes between the edges' at every radius.
-        let (w, h) = (13, 5);
+        // Taller than the 2r + 1 rows `BlockRows` holds, so that it replaces rows.
+        let (w, h) = (13, 9);
         let score: Vec<f64> = (0..w * h).map(|p| (p * p % 13) as f64 + 0.5).collect();
         for r in 1..=3 {
             let outside = Outside::new(w, h, r, &score);
             // Rows down, up and out of order: `BlockRows` keeps rows from one to the next.
-            let mut sums = BlockRows::default();
-            for j in (0..h).chain((0..h).rev()).chain([1, 4, 0, 3]) {
-                let got = outside.row(j, &mut sums).to_vec();
+            let mut sums = BlockRows::new(&outside);
+            for j in (0..h).chain((0..h).rev()).chain([1, 8, 0, 4, 3]) {
+                let got = sums.row(j).to_vec();
                 for i in 0..w {
                     let inside: Vec<_> = block(i, j, w, h, r).collect();
                     let want: f64 = (0..w * h)
@@ -753,7 +767,7 @@ mod tests {
             // outside it changes them.
             let sum = |score: &[f64]| {
                 let outside = Outside::new(w, h, r, score);
-                outside.row(2, &mut BlockRows::default())[3].to_bits()
+                BlockRows::new(&outside).row(2)[3].to_bits()
             };
             let mut other = score.clone();
             other[(2 + r).min(h - 1) * w + (3 + r).min(w - 1)] = 1e17;
@@ -782,9 +796,9 @@ mod tests {
             let rows_from = |e: usize| (e..h).rev().fold(0.0, |s, b| s + before(b, w));
             for r in 1..=4 {
                 let outside = Outside::new(w, h, r, &score);
-                let mut rows = BlockRows::default();
+                let mut rows = BlockRows::new(&outside);
                 for j in 0..h {
-                    let got = outside.row(j, &mut rows);
+                    let got = rows.row(j);
                     for (i, got) in got.iter().enumerate() {
                         let Block { cols, rows: ends } = Block::new(i, j, w, h, r);
                         let mut want = rows_before(ends.start) + rows_from(ends.end);

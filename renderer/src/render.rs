@@ -208,7 +208,8 @@ fn render_adaptive(
     // (one sample has none: its neighbours' samples score it); and its products' sums
     // when the moments are wanted. Each is kept only where it is used: at the pixel limit
     // every byte a pixel counts, and each page of a fresh buffer costs the kernel's time
-    // to map it (renderer/docs/performance.md, 2026-11-29 evening).
+    // to map it (renderer/docs/performance.md, "The step between the adaptive passes made
+    // cheaper").
     let wants_sq = moment_rows.iter().any(|m| !m.is_empty());
     let wants_var = pilot > 1;
     let mut sums = vec![Color::ZERO; w * h];

@@ -166,9 +166,9 @@ figures in renderer/docs/robustness.md"
     narrow_renders_take_no_more_memory_a_row_than_the_size_check_says();
 }
 
-/// Images one pixel wide: what a render keeps per row (the rows' slices of the image and
-/// the moments, adaptive sampling's sums of whole rows and its one more column) counts as
-/// much as what it keeps per pixel, and the size check counts it too.
+/// Images one pixel wide: what a render keeps per row (the rows' slices of the image, the
+/// moments and adaptive sampling's pilot, and its sums of whole rows) counts as much as
+/// what it keeps per pixel, and the size check counts it too.
 fn narrow_renders_take_no_more_memory_a_row_than_the_size_check_says() {
     let (small, large) = (4096u32, 16384u32);
     let most = PEAK_BYTES_PER_PIXEL + PEAK_BYTES_PER_ROW;
