@@ -103,10 +103,12 @@ fn render_in_pool(scene: &Scene, opts: &Options) -> Image {
         object_id: vec![0.0; w * h],
     });
     // One moments row per image row; empty rows when moments are off.
-    let moment_rows: Vec<&mut [f32]> = match moments.as_mut() {
-        Some(m) => m.chunks_mut(w * 6).collect(),
-        None => (0..h).map(|_| -> &mut [f32] { &mut [] }).collect(),
-    };
+    let moment_rows = rows_if(
+        moments.is_some(),
+        moments.as_deref_mut().unwrap_or_default(),
+        w * 6,
+        h,
+    );
     let (mut non_finite, samples): (usize, u64) = match pilot {
         None => (
             rgb.par_chunks_mut(w * 3)
