@@ -280,17 +280,92 @@ fn sobol_reversed(i: u32) -> (u32, u32) {
 /// carry only upwards), and are reversed back. So the flip of each digit depends on the
 /// digits above it alone: every elementary interval is mapped onto one of the same size,
 /// and a (0, m, 2)-net stays one.
-#[inline]
-fn owen_reversed(mut v: u32, seed: u32) -> u32 {
+#[inline(always)]
+fn owen_reversed(v: u32, seed: u32) -> u32 {
+    reverse32(owen_hash(v, seed))
+}
+
+/// [`owen_reversed`] of two fractions at once: the two hashes, then both reversals in one
+/// register ([`reverse32x2`]).
+#[inline(always)]
+fn owen_reversed2(a: u32, seed_a: u32, b: u32, seed_b: u32) -> (u32, u32) {
+    reverse32x2(owen_hash(a, seed_a), owen_hash(b, seed_b))
+}
+
+/// [`owen_reversed`]'s hash, before the bits are reversed back.
+#[inline(always)]
+fn owen_hash(mut v: u32, seed: u32) -> u32 {
     v ^= v.wrapping_mul(0x3d20_adea);
     v = v.wrapping_add(seed);
     v = v.wrapping_mul((seed >> 16) | 1);
     v ^= v.wrapping_mul(0x0552_6c56);
     v ^= v.wrapping_mul(0x53a2_2864);
-    reverse32(v)
+    v
 }
 
-/// Each byte's bits reversed: [`reverse32`]'s table.
+/// `v.reverse_bits()`. x86-64 has no instruction for it, and the standard library's form
+/// (a byte swap, then three rounds of masks and shifts, each on the last) is a chain of
+/// about ten cycles on the way of every sobol number ([`owen_reversed`]). Where SSSE3 is
+/// there (the x86-64-v3 build), [`reverse32x2`]'s byte shuffles; elsewhere four lookups
+/// of a byte's reversal, which run side by side. Same bits.
+#[inline(always)]
+fn reverse32(v: u32) -> u32 {
+    #[cfg(all(target_arch = "x86_64", target_feature = "ssse3"))]
+    {
+        reverse32x2(v, 0).0
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "ssse3")))]
+    {
+        reverse32_by_bytes(v)
+    }
+}
+
+/// `(a.reverse_bits(), b.reverse_bits())`. With SSSE3 both words go into one register,
+/// where two byte shuffles look up each half byte's reversal in a 16-entry table held in a
+/// register and a third reverses the bytes of each word: about a dozen instructions for
+/// the pair, against about 15 a word for the lookups of [`reverse32_by_bytes`] (which were
+/// 6.5 % of an adaptive `sobol` render's instructions on the Cornell box, the sampler's
+/// largest part; renderer/docs/performance.md, 2026-11-29 evening).
+#[inline(always)]
+fn reverse32x2(a: u32, b: u32) -> (u32, u32) {
+    #[cfg(all(target_arch = "x86_64", target_feature = "ssse3"))]
+    {
+        use std::arch::x86_64::*;
+        // SAFETY: the cfg above makes SSE2 and SSSE3 part of the build's target, and these
+        // intrinsics only read and write registers.
+        unsafe {
+            let v = _mm_cvtsi64_si128((u64::from(b) << 32 | u64::from(a)) as i64);
+            let low = _mm_set1_epi8(0x0f);
+            // Entry n: n's four bits reversed, in a byte's high half or its low one.
+            const NIBBLE: [u8; 16] = [0, 8, 4, 12, 2, 10, 6, 14, 1, 9, 5, 13, 3, 11, 7, 15];
+            const TO_HIGH: [u8; 16] = {
+                let mut t = NIBBLE;
+                let mut k = 0;
+                while k < 16 {
+                    t[k] <<= 4;
+                    k += 1;
+                }
+                t
+            };
+            let to_high = _mm_loadu_si128(TO_HIGH.as_ptr().cast());
+            let to_low = _mm_loadu_si128(NIBBLE.as_ptr().cast());
+            let lo = _mm_and_si128(v, low);
+            let hi = _mm_and_si128(_mm_srli_epi16::<4>(v), low);
+            let bytes = _mm_or_si128(_mm_shuffle_epi8(to_high, lo), _mm_shuffle_epi8(to_low, hi));
+            // Each word's bytes in reverse order (the upper 8 bytes are not read).
+            let order = _mm_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12);
+            let r = _mm_cvtsi128_si64(_mm_shuffle_epi8(bytes, order)) as u64;
+            (r as u32, (r >> 32) as u32)
+        }
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "ssse3")))]
+    {
+        (reverse32_by_bytes(a), reverse32_by_bytes(b))
+    }
+}
+
+/// Each byte's bits reversed: [`reverse32_by_bytes`]' table.
+#[cfg_attr(all(target_arch = "x86_64", target_feature = "ssse3"), allow(dead_code))]
 const REVERSED_BYTE: [u8; 256] = {
     let mut t = [0u8; 256];
     let mut x = 0;
@@ -301,14 +376,12 @@ const REVERSED_BYTE: [u8; 256] = {
     t
 };
 
-/// `v.reverse_bits()`, by four lookups of a byte's reversal. x86-64 has no instruction
-/// for it, and the standard library's form (a byte swap, then three rounds of masks and
-/// shifts, each on the last) is a chain of about ten cycles, on the way of every sobol
-/// number ([`owen_reversed`]); the lookups run side by side. Same bits; on the sobol
-/// renders of the Mitsuba comparison's scenes (256 × 256, two threads, alternating
-/// pairs) 4–6 % less time (renderer/docs/performance.md, 2026-11-29).
+/// `v.reverse_bits()` by four lookups of a byte's reversal: [`reverse32`] where SSSE3 is
+/// not there. (On the sobol renders of the Mitsuba comparison's scenes, 4–6 % less time
+/// than the standard library's form; renderer/docs/performance.md, 2026-11-29.)
+#[cfg_attr(all(target_arch = "x86_64", target_feature = "ssse3"), allow(dead_code))]
 #[inline(always)]
-fn reverse32(v: u32) -> u32 {
+fn reverse32_by_bytes(v: u32) -> u32 {
     let r = |byte: u32| u32::from(REVERSED_BYTE[(byte & 0xff) as usize]);
     r(v) << 24 | r(v >> 8) << 16 | r(v >> 16) << 8 | r(v >> 24)
 }
@@ -478,10 +551,8 @@ impl PixelSampler {
                 let (a, b) = sobol_reversed(self.sobol_index(key as u32));
                 let (sa, sb) = ((key >> 32) as u32, second as u32);
                 let s = 1.0 / 4_294_967_296.0;
-                (
-                    owen_reversed(a, sa) as f64 * s,
-                    owen_reversed(b, sb) as f64 * s,
-                )
+                let (x, y) = owen_reversed2(a, sa, b, sb);
+                (x as f64 * s, y as f64 * s)
             }
         }
     }
@@ -781,28 +852,38 @@ mod tests {
         assert_eq!(bits, PINNED_SOBOL, "the sobol sampler's numbers changed");
     }
 
-    /// `reverse32`'s table lookups reverse a word's bits as `u32::reverse_bits` does: every
-    /// value of each byte in each position, with the other bytes random, and random words.
+    /// `reverse32`, `reverse32x2` (both halves of the pair) and the table lookups of
+    /// `reverse32_by_bytes` reverse a word's bits as `u32::reverse_bits` does: every value
+    /// of each byte in each position, with the other bytes random, and random words.
     #[test]
     fn reverse32_is_reverse_bits() {
+        let check = |v: u32, other: u32, what: &str| {
+            let want = v.reverse_bits();
+            let got = [
+                ("reverse32", reverse32(v)),
+                ("reverse32x2's first", reverse32x2(v, other).0),
+                ("reverse32x2's second", reverse32x2(other, v).1),
+                ("reverse32_by_bytes", reverse32_by_bytes(v)),
+            ];
+            for (name, r) in got {
+                assert_eq!(
+                    r, want,
+                    "{v:#010x} (beside {other:#010x}): {name} (renderer/src/sampler.rs) differs \
+                     from u32::reverse_bits {what}"
+                );
+            }
+        };
         let mut rng = 0x0bad_cafe_u64;
         for k in 0..4 {
             for x in 0..256u32 {
                 rng = mix64(rng);
                 let v = (rng as u32 & !(0xff << (8 * k))) | x << (8 * k);
-                assert_eq!(
-                    reverse32(v),
-                    v.reverse_bits(),
-                    "{v:#010x}: reverse32 (renderer/src/sampler.rs, REVERSED_BYTE) differs from \
-                     u32::reverse_bits in byte {k}"
-                );
+                check(v, (rng >> 32) as u32, &format!("in byte {k}"));
             }
         }
-        for v in (0..100_000).map(|_| {
+        for _ in 0..100_000 {
             rng = mix64(rng);
-            rng as u32
-        }) {
-            assert_eq!(reverse32(v), v.reverse_bits(), "{v:#010x}");
+            check(rng as u32, (rng >> 32) as u32, "");
         }
     }
 
