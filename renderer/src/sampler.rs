@@ -365,7 +365,10 @@ fn reverse32x2(a: u32, b: u32) -> (u32, u32) {
 }
 
 /// Each byte's bits reversed: [`reverse32_by_bytes`]' table.
-#[cfg_attr(all(target_arch = "x86_64", target_feature = "ssse3"), allow(dead_code))]
+#[cfg_attr(
+    all(target_arch = "x86_64", target_feature = "ssse3"),
+    allow(dead_code)
+)]
 const REVERSED_BYTE: [u8; 256] = {
     let mut t = [0u8; 256];
     let mut x = 0;
@@ -379,7 +382,10 @@ const REVERSED_BYTE: [u8; 256] = {
 /// `v.reverse_bits()` by four lookups of a byte's reversal: [`reverse32`] where SSSE3 is
 /// not there. (On the sobol renders of the Mitsuba comparison's scenes, 4–6 % less time
 /// than the standard library's form; renderer/docs/performance.md, 2026-11-29.)
-#[cfg_attr(all(target_arch = "x86_64", target_feature = "ssse3"), allow(dead_code))]
+#[cfg_attr(
+    all(target_arch = "x86_64", target_feature = "ssse3"),
+    allow(dead_code)
+)]
 #[inline(always)]
 fn reverse32_by_bytes(v: u32) -> u32 {
     let r = |byte: u32| u32::from(REVERSED_BYTE[(byte & 0xff) as usize]);
