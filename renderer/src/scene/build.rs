@@ -37,7 +37,7 @@ pub const PEAK_BYTES_PER_PIXEL: u64 = 168;
 
 /// The most memory a render takes per row of the image beyond its pixels', in bytes: the
 /// rows' slices of the image and its moments, adaptive sampling's sums of whole rows. It
-/// counts where an image is a few pixels wide (renderer/tests/memory.rs: 191.8 bytes a
+/// counts where an image is a few pixels wide (renderer/tests/memory.rs: 192.0 bytes a
 /// row one pixel wide, 165.6 of them the pixel's).
 pub const PEAK_BYTES_PER_ROW: u64 = 32;
 
